@@ -1,0 +1,385 @@
+"""SO3 / SE3 kernels on rotation matrices.
+
+Conventions: right perturbation on the manifold, SE3 tangent order ``[rho, phi]``
+(translation first). Scalar helpers write into preallocated outputs so they can be called
+inside hot loops without allocating; the ``*_batch`` kernels loop over samples.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .._jit import jit
+
+#: Below this angle Exp uses its Taylor series (terms to theta^4, error ~ theta^6 / 5040).
+EXP_SMALL_ANGLE = 1e-4
+#: Below this |v| / w Log uses its series (error ~ (n/w)^4).
+LOG_SMALL_ANGLE = 1e-6
+#: Below this angle the SO3 Jacobian coefficients use their Taylor series.
+JAC_SMALL_ANGLE = 1e-2
+#: Below this angle the SE3 Jacobian's Q-block coefficients use their Taylor series
+#: (their closed forms lose ~ 1e2 eps / theta^4 to cancellation).
+SE3_Q_SMALL_ANGLE = 1e-1
+
+
+@jit
+def so3_exp_into(x, y, z, R):
+    """R = Exp([x, y, z]) (Rodrigues, with a Taylor branch near 0)."""
+    t2 = x * x + y * y + z * z
+    if t2 < EXP_SMALL_ANGLE * EXP_SMALL_ANGLE:
+        a = 1.0 - t2 / 6.0 + t2 * t2 / 120.0
+        b = 0.5 - t2 / 24.0 + t2 * t2 / 720.0
+    else:
+        t = math.sqrt(t2)
+        a = math.sin(t) / t
+        s = math.sin(0.5 * t) / t
+        b = 2.0 * s * s
+    xx = x * x
+    yy = y * y
+    zz = z * z
+    xy = x * y
+    xz = x * z
+    yz = y * z
+    R[0, 0] = 1.0 - b * (yy + zz)
+    R[0, 1] = b * xy - a * z
+    R[0, 2] = b * xz + a * y
+    R[1, 0] = b * xy + a * z
+    R[1, 1] = 1.0 - b * (xx + zz)
+    R[1, 2] = b * yz - a * x
+    R[2, 0] = b * xz - a * y
+    R[2, 1] = b * yz + a * x
+    R[2, 2] = 1.0 - b * (xx + yy)
+
+
+@jit
+def mat_to_quat_wxyz_into(R, q):
+    """Shepperd's method: the largest of (trace, diagonal) picks the stable branch; w >= 0."""
+    tr = R[0, 0] + R[1, 1] + R[2, 2]
+    if tr >= R[0, 0] and tr >= R[1, 1] and tr >= R[2, 2]:
+        s = math.sqrt(1.0 + tr) * 2.0
+        w = 0.25 * s
+        x = (R[2, 1] - R[1, 2]) / s
+        y = (R[0, 2] - R[2, 0]) / s
+        z = (R[1, 0] - R[0, 1]) / s
+    elif R[0, 0] >= R[1, 1] and R[0, 0] >= R[2, 2]:
+        s = math.sqrt(max(1.0 + R[0, 0] - R[1, 1] - R[2, 2], 0.0)) * 2.0
+        w = (R[2, 1] - R[1, 2]) / s
+        x = 0.25 * s
+        y = (R[0, 1] + R[1, 0]) / s
+        z = (R[0, 2] + R[2, 0]) / s
+    elif R[1, 1] >= R[2, 2]:
+        s = math.sqrt(max(1.0 + R[1, 1] - R[0, 0] - R[2, 2], 0.0)) * 2.0
+        w = (R[0, 2] - R[2, 0]) / s
+        x = (R[0, 1] + R[1, 0]) / s
+        y = 0.25 * s
+        z = (R[1, 2] + R[2, 1]) / s
+    else:
+        s = math.sqrt(max(1.0 + R[2, 2] - R[0, 0] - R[1, 1], 0.0)) * 2.0
+        w = (R[1, 0] - R[0, 1]) / s
+        x = (R[0, 2] + R[2, 0]) / s
+        y = (R[1, 2] + R[2, 1]) / s
+        z = 0.25 * s
+    if w < 0.0:
+        w, x, y, z = -w, -x, -y, -z
+    n = math.sqrt(w * w + x * x + y * y + z * z)
+    q[0] = w / n
+    q[1] = x / n
+    q[2] = y / n
+    q[3] = z / n
+
+
+@jit
+def quat_wxyz_to_mat_into(w, x, y, z, R):
+    """Rotation matrix of a (not necessarily unit) quaternion; it is normalized first."""
+    n = math.sqrt(w * w + x * x + y * y + z * z)
+    w /= n
+    x /= n
+    y /= n
+    z /= n
+    R[0, 0] = 1.0 - 2.0 * (y * y + z * z)
+    R[0, 1] = 2.0 * (x * y - w * z)
+    R[0, 2] = 2.0 * (x * z + w * y)
+    R[1, 0] = 2.0 * (x * y + w * z)
+    R[1, 1] = 1.0 - 2.0 * (x * x + z * z)
+    R[1, 2] = 2.0 * (y * z - w * x)
+    R[2, 0] = 2.0 * (x * z - w * y)
+    R[2, 1] = 2.0 * (y * z + w * x)
+    R[2, 2] = 1.0 - 2.0 * (x * x + y * y)
+
+
+@jit
+def quat_wxyz_log_into(w, x, y, z, phi):
+    """phi = Log(q) for a unit quaternion, either sign: 2 atan2(|v|, |w|) v/|v| sign(w)."""
+    if w < 0.0:
+        w, x, y, z = -w, -x, -y, -z
+    n2 = x * x + y * y + z * z
+    n = math.sqrt(n2)
+    if n < LOG_SMALL_ANGLE * w:
+        # 2 atan(n/w)/n = (2/w) (1 - (n/w)^2 / 3 + ...)
+        r2 = n2 / (w * w)
+        scale = 2.0 / w * (1.0 - r2 / 3.0)
+    else:
+        scale = 2.0 * math.atan2(n, w) / n
+    phi[0] = scale * x
+    phi[1] = scale * y
+    phi[2] = scale * z
+
+
+@jit
+def so3_log_into(R, q_scratch, phi):
+    """phi = Log(R), |phi| <= pi; stable near 0 and near pi (through the quaternion)."""
+    mat_to_quat_wxyz_into(R, q_scratch)
+    quat_wxyz_log_into(q_scratch[0], q_scratch[1], q_scratch[2], q_scratch[3], phi)
+
+
+@jit
+def so3_jac_coeffs(t2):
+    """(a, b, c) with sin t/t, (1 - cos t)/t^2, (t - sin t)/t^3 for t^2 = t2."""
+    if t2 < JAC_SMALL_ANGLE * JAC_SMALL_ANGLE:
+        a = 1.0 - t2 / 6.0 + t2 * t2 / 120.0
+        b = 0.5 - t2 / 24.0 + t2 * t2 / 720.0
+        c = 1.0 / 6.0 - t2 / 120.0 + t2 * t2 / 5040.0
+    else:
+        t = math.sqrt(t2)
+        st = math.sin(t)
+        a = st / t
+        s = math.sin(0.5 * t) / t
+        b = 2.0 * s * s
+        c = (t - st) / (t2 * t)
+    return a, b, c
+
+
+@jit
+def so3_jac_inv_coeff(t2):
+    """1/t^2 - cot(t/2) / (2 t): the K^2 coefficient of the inverse Jacobians."""
+    if t2 < JAC_SMALL_ANGLE * JAC_SMALL_ANGLE:
+        return 1.0 / 12.0 + t2 / 720.0 + t2 * t2 / 30240.0
+    t = math.sqrt(t2)
+    h = 0.5 * t
+    return 1.0 / t2 - math.cos(h) / (2.0 * t * math.sin(h))
+
+
+@jit
+def so3_jacobian_into(x, y, z, sign, J):
+    """Right (sign = -1) or left (sign = +1) Jacobian: I + sign b K + c K^2."""
+    t2 = x * x + y * y + z * z
+    _, b, c = so3_jac_coeffs(t2)
+    b *= sign
+    xx = x * x
+    yy = y * y
+    zz = z * z
+    J[0, 0] = 1.0 - c * (yy + zz)
+    J[0, 1] = -b * z + c * x * y
+    J[0, 2] = b * y + c * x * z
+    J[1, 0] = b * z + c * x * y
+    J[1, 1] = 1.0 - c * (xx + zz)
+    J[1, 2] = -b * x + c * y * z
+    J[2, 0] = -b * y + c * x * z
+    J[2, 1] = b * x + c * y * z
+    J[2, 2] = 1.0 - c * (xx + yy)
+
+
+@jit
+def so3_jacobian_inv_into(x, y, z, sign, J):
+    """Inverse right (sign = -1) or left (sign = +1) Jacobian: I - sign K/2 + d K^2."""
+    t2 = x * x + y * y + z * z
+    d = so3_jac_inv_coeff(t2)
+    b = -0.5 * sign
+    xx = x * x
+    yy = y * y
+    zz = z * z
+    J[0, 0] = 1.0 - d * (yy + zz)
+    J[0, 1] = -b * z + d * x * y
+    J[0, 2] = b * y + d * x * z
+    J[1, 0] = b * z + d * x * y
+    J[1, 1] = 1.0 - d * (xx + zz)
+    J[1, 2] = -b * x + d * y * z
+    J[2, 0] = -b * y + d * x * z
+    J[2, 1] = b * x + d * y * z
+    J[2, 2] = 1.0 - d * (xx + yy)
+
+
+@jit
+def _hat_into(x, y, z, K):
+    K[0, 0] = 0.0
+    K[0, 1] = -z
+    K[0, 2] = y
+    K[1, 0] = z
+    K[1, 1] = 0.0
+    K[1, 2] = -x
+    K[2, 0] = -y
+    K[2, 1] = x
+    K[2, 2] = 0.0
+
+
+@jit
+def se3_q_block_into(rho, phi, sign, Q, scratch):
+    """Barfoot's Q(rho, phi) block of the left (sign = +1) SE3 Jacobian; sign = -1 gives
+    Q(-rho, -phi), the block of the right Jacobian.
+
+    scratch: (4, 3, 3) work array.
+    """
+    px = sign * phi[0]
+    py = sign * phi[1]
+    pz = sign * phi[2]
+    P = scratch[0]
+    Rh = scratch[1]
+    A = scratch[2]
+    B = scratch[3]
+    _hat_into(px, py, pz, P)
+    _hat_into(sign * rho[0], sign * rho[1], sign * rho[2], Rh)
+    t2 = px * px + py * py + pz * pz
+    if t2 < SE3_Q_SMALL_ANGLE * SE3_Q_SMALL_ANGLE:
+        c1 = 1.0 / 6.0 - t2 / 120.0 + t2 * t2 / 5040.0 - t2 * t2 * t2 / 362880.0
+        c2 = 1.0 / 24.0 - t2 / 720.0 + t2 * t2 / 40320.0 - t2 * t2 * t2 / 3628800.0
+        c4 = 1.0 / 120.0 - t2 / 2520.0 + t2 * t2 / 120960.0 - t2 * t2 * t2 / 9979200.0
+    else:
+        t = math.sqrt(t2)
+        st = math.sin(t)
+        ct = math.cos(t)
+        c1 = (t - st) / (t2 * t)
+        c2 = (0.5 * t2 + ct - 1.0) / (t2 * t2)
+        c4 = (2.0 * t - 3.0 * st + t * ct) / (2.0 * t2 * t2 * t)
+    # A = P Rh, B = Rh P
+    for i in range(3):
+        for j in range(3):
+            s1 = 0.0
+            s2 = 0.0
+            for m in range(3):
+                s1 += P[i, m] * Rh[m, j]
+                s2 += Rh[i, m] * P[m, j]
+            A[i, j] = s1
+            B[i, j] = s2
+    for i in range(3):
+        for j in range(3):
+            prp = 0.0  # P Rh P
+            pprh = 0.0  # P P Rh
+            rhpp = 0.0  # Rh P P
+            for m in range(3):
+                prp += A[i, m] * P[m, j]
+                pprh += P[i, m] * A[m, j]
+                rhpp += B[i, m] * P[m, j]
+            # P Rh P P and P P Rh P
+            prpp = 0.0
+            pprp = 0.0
+            for m in range(3):
+                for l in range(3):
+                    prpp += A[i, m] * P[m, l] * P[l, j]
+                    pprp += P[i, m] * A[m, l] * P[l, j]
+            Q[i, j] = (
+                0.5 * Rh[i, j]
+                + c1 * (A[i, j] + B[i, j] + prp)
+                + c2 * (pprh + rhpp - 3.0 * prp)
+                + c4 * (prpp + pprp)
+            )
+
+
+# ----------------------------------------------------------------------------- batches
+
+
+@jit
+def so3_exp_batch(phi, out):
+    for i in range(phi.shape[0]):
+        so3_exp_into(phi[i, 0], phi[i, 1], phi[i, 2], out[i])
+
+
+@jit
+def so3_log_batch(R, out):
+    q = np.empty(4)
+    for i in range(R.shape[0]):
+        so3_log_into(R[i], q, out[i])
+
+
+@jit
+def quat_wxyz_log_batch(q, out):
+    for i in range(q.shape[0]):
+        n = math.sqrt(q[i, 0] ** 2 + q[i, 1] ** 2 + q[i, 2] ** 2 + q[i, 3] ** 2)
+        quat_wxyz_log_into(q[i, 0] / n, q[i, 1] / n, q[i, 2] / n, q[i, 3] / n, out[i])
+
+
+@jit
+def mat_to_quat_wxyz_batch(R, out):
+    for i in range(R.shape[0]):
+        mat_to_quat_wxyz_into(R[i], out[i])
+
+
+@jit
+def quat_wxyz_to_mat_batch(q, out):
+    for i in range(q.shape[0]):
+        quat_wxyz_to_mat_into(q[i, 0], q[i, 1], q[i, 2], q[i, 3], out[i])
+
+
+@jit
+def so3_jacobian_batch(phi, sign, out):
+    for i in range(phi.shape[0]):
+        so3_jacobian_into(phi[i, 0], phi[i, 1], phi[i, 2], sign, out[i])
+
+
+@jit
+def so3_jacobian_inv_batch(phi, sign, out):
+    for i in range(phi.shape[0]):
+        so3_jacobian_inv_into(phi[i, 0], phi[i, 1], phi[i, 2], sign, out[i])
+
+
+@jit
+def se3_exp_batch(xi, out):
+    """xi (N, 6) = [rho, phi] -> (N, 4, 4)."""
+    J = np.empty((3, 3))
+    for i in range(xi.shape[0]):
+        T = out[i]
+        so3_exp_into(xi[i, 3], xi[i, 4], xi[i, 5], T[:3, :3])
+        so3_jacobian_into(xi[i, 3], xi[i, 4], xi[i, 5], 1.0, J)
+        for r in range(3):
+            T[r, 3] = J[r, 0] * xi[i, 0] + J[r, 1] * xi[i, 1] + J[r, 2] * xi[i, 2]
+            T[3, r] = 0.0
+        T[3, 3] = 1.0
+
+
+@jit
+def se3_log_batch(T, out):
+    q = np.empty(4)
+    phi = np.empty(3)
+    J = np.empty((3, 3))
+    for i in range(T.shape[0]):
+        so3_log_into(T[i, :3, :3], q, phi)
+        so3_jacobian_inv_into(phi[0], phi[1], phi[2], 1.0, J)
+        for r in range(3):
+            out[i, r] = J[r, 0] * T[i, 0, 3] + J[r, 1] * T[i, 1, 3] + J[r, 2] * T[i, 2, 3]
+            out[i, 3 + r] = phi[r]
+
+
+@jit
+def se3_jacobian_batch(xi, sign, out):
+    """Left (sign = +1) or right (sign = -1) SE3 Jacobian, (N, 6, 6)."""
+    scratch = np.empty((4, 3, 3))
+    for i in range(xi.shape[0]):
+        J = out[i]
+        so3_jacobian_into(xi[i, 3], xi[i, 4], xi[i, 5], sign, J[:3, :3])
+        so3_jacobian_into(xi[i, 3], xi[i, 4], xi[i, 5], sign, J[3:, 3:])
+        se3_q_block_into(xi[i, :3], xi[i, 3:], sign, J[:3, 3:], scratch)
+        for r in range(3):
+            for c in range(3):
+                J[3 + r, c] = 0.0
+
+
+@jit
+def se3_jacobian_inv_batch(xi, sign, out):
+    """Inverse left (sign = +1) or right (sign = -1) SE3 Jacobian: [[Ji, -Ji Q Ji], [0, Ji]]."""
+    scratch = np.empty((4, 3, 3))
+    Q = np.empty((3, 3))
+    for i in range(xi.shape[0]):
+        J = out[i]
+        so3_jacobian_inv_into(xi[i, 3], xi[i, 4], xi[i, 5], sign, J[:3, :3])
+        so3_jacobian_inv_into(xi[i, 3], xi[i, 4], xi[i, 5], sign, J[3:, 3:])
+        se3_q_block_into(xi[i, :3], xi[i, 3:], sign, Q, scratch)
+        Ji = J[:3, :3]
+        for r in range(3):
+            for c in range(3):
+                s = 0.0
+                for m in range(3):
+                    for n in range(3):
+                        s += Ji[r, m] * Q[m, n] * Ji[n, c]
+                J[r, 3 + c] = -s
+                J[3 + r, c] = 0.0

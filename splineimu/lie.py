@@ -1,0 +1,323 @@
+"""SO3 and SE3: exponential and logarithm maps, Jacobians, adjoints, quaternion helpers.
+
+Conventions (fixed for the whole package)
+-----------------------------------------
+- Rotations are ``(..., 3, 3)`` matrices in the array API; quaternions are Hamilton,
+  ``quat_xyzw`` order (scipy's). Poses are ``(..., 4, 4)`` homogeneous matrices ``a_T_b``.
+- SE3 tangent vectors are ``[rho, phi]``: translation part first, rotation part second.
+- Jacobians are for the *right* perturbation unless the name says ``left``:
+  ``Exp(phi + dphi) ~= Exp(phi) Exp(J_r(phi) dphi)`` and
+  ``Exp(phi + dphi) ~= Exp(J_l(phi) dphi) Exp(phi)``.
+- Every function accepts one element (``(3,)``, ``(3, 3)``, ...) or any batch with leading
+  dimensions, and returns the same leading dimensions.
+
+Numerics: each closed form has a named small-angle threshold below which a Taylor series of
+matching order is used (see :mod:`splineimu._kernels.lie`); Log goes through a quaternion
+(Shepperd's method + ``atan2``), which is stable at and near pi and indifferent to the sign
+of a quaternion input.
+
+References
+----------
+J. Sola, J. Deray, D. Atchuthan, "A micro Lie theory for state estimation in robotics", 2018.
+T. Barfoot, "State Estimation for Robotics", 2017 (SE3 Jacobian blocks).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._kernels import lie as _k
+from .errors import SplineImuError
+
+__all__ = [
+    "so3_hat", "so3_vee", "so3_exp", "so3_log", "so3_compose", "so3_inverse", "so3_act",
+    "so3_adjoint", "so3_left_jacobian", "so3_right_jacobian", "so3_left_jacobian_inv",
+    "so3_right_jacobian_inv",
+    "se3_hat", "se3_vee", "se3_exp", "se3_log", "se3_compose", "se3_inverse", "se3_act",
+    "se3_adjoint", "se3_left_jacobian", "se3_right_jacobian", "se3_left_jacobian_inv",
+    "se3_right_jacobian_inv",
+    "quat_xyzw_to_matrix", "matrix_to_quat_xyzw", "quat_make_continuous", "quat_normalize",
+]
+
+
+def _as_batch(x, tail: tuple, name: str):
+    """Return ``(x as (N, *tail) contiguous float64, leading shape)``."""
+    a = np.asarray(x, dtype=np.float64)
+    nt = len(tail)
+    if a.ndim < nt or a.shape[a.ndim - nt:] != tail:
+        want = "(..., " + ", ".join(map(str, tail)) + ")"
+        raise SplineImuError(f"Expected `{name}` to have shape {want}, got {a.shape}")
+    lead = a.shape[: a.ndim - nt]
+    return np.ascontiguousarray(a.reshape((-1,) + tail)), lead
+
+
+def _unbatch(out, lead, tail):
+    return out.reshape(lead + tail)
+
+
+# --------------------------------------------------------------------------------- SO3
+
+
+def so3_hat(phi):
+    """Skew-symmetric matrix ``[phi]x`` of ``phi`` (..., 3) -> (..., 3, 3)."""
+    p, lead = _as_batch(phi, (3,), "phi")
+    K = np.zeros((p.shape[0], 3, 3))
+    K[:, 0, 1] = -p[:, 2]
+    K[:, 0, 2] = p[:, 1]
+    K[:, 1, 0] = p[:, 2]
+    K[:, 1, 2] = -p[:, 0]
+    K[:, 2, 0] = -p[:, 1]
+    K[:, 2, 1] = p[:, 0]
+    return _unbatch(K, lead, (3, 3))
+
+
+def so3_vee(K):
+    """Inverse of :func:`so3_hat` (uses the antisymmetric part): (..., 3, 3) -> (..., 3)."""
+    M, lead = _as_batch(K, (3, 3), "K")
+    v = 0.5 * np.stack([M[:, 2, 1] - M[:, 1, 2], M[:, 0, 2] - M[:, 2, 0], M[:, 1, 0] - M[:, 0, 1]], axis=1)
+    return _unbatch(v, lead, (3,))
+
+
+def so3_exp(phi):
+    """Exponential map ``Exp(phi) = exp([phi]x)`` (Rodrigues), (..., 3) -> (..., 3, 3).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> np.round(so3_exp([0.0, 0.0, np.pi / 2]), 12)[:2]
+    array([[ 0., -1.,  0.],
+           [ 1.,  0.,  0.]])
+    """
+    p, lead = _as_batch(phi, (3,), "phi")
+    out = np.empty((p.shape[0], 3, 3))
+    _k.so3_exp_batch(p, out)
+    return _unbatch(out, lead, (3, 3))
+
+
+def so3_log(rot):
+    """Logarithm map, the rotation vector with norm in [0, pi].
+
+    Parameters
+    ----------
+    rot : array_like, (..., 3, 3) rotation matrices or (..., 4) quaternions ``quat_xyzw``
+        A quaternion need not be unit (it is normalized) and its sign does not matter.
+
+    Returns
+    -------
+    phi : ndarray, (..., 3)
+
+    Notes
+    -----
+    Computed as ``2 atan2(|v|, |w|) v / |v| sign(w)`` on the (Shepperd) quaternion, which is
+    accurate at both ends of [0, pi]. At exactly pi the sign of the axis is arbitrary.
+    """
+    a = np.asarray(rot, dtype=np.float64)
+    if a.ndim >= 1 and a.shape[-1] == 4:
+        q, lead = _as_batch(a, (4,), "rot")
+        wxyz = np.ascontiguousarray(q[:, [3, 0, 1, 2]])
+        _check_quat_norm(wxyz, "rot")
+        out = np.empty((q.shape[0], 3))
+        _k.quat_wxyz_log_batch(wxyz, out)
+        return _unbatch(out, lead, (3,))
+    R, lead = _as_batch(a, (3, 3), "rot")
+    out = np.empty((R.shape[0], 3))
+    _k.so3_log_batch(R, out)
+    return _unbatch(out, lead, (3,))
+
+
+def so3_compose(R_ab, R_bc):
+    """``a_R_c = a_R_b @ b_R_c`` with broadcasting over leading dimensions."""
+    return np.matmul(np.asarray(R_ab, dtype=np.float64), np.asarray(R_bc, dtype=np.float64))
+
+
+def so3_inverse(R):
+    """Inverse (transpose) of rotation matrices (..., 3, 3)."""
+    return np.swapaxes(np.asarray(R, dtype=np.float64), -1, -2).copy()
+
+
+def so3_act(R, v):
+    """Rotate vectors: ``R @ v`` for (..., 3, 3) and (..., 3), broadcasting."""
+    return np.einsum("...ij,...j->...i", np.asarray(R, dtype=np.float64), np.asarray(v, dtype=np.float64))
+
+
+def so3_adjoint(R):
+    """Adjoint of SO3 on its tangent space, which is ``R`` itself: ``R Exp(v) R^T = Exp(R v)``."""
+    return np.array(R, dtype=np.float64)
+
+
+def _so3_jac(phi, sign, inverse):
+    p, lead = _as_batch(phi, (3,), "phi")
+    out = np.empty((p.shape[0], 3, 3))
+    if inverse:
+        _k.so3_jacobian_inv_batch(p, float(sign), out)
+    else:
+        _k.so3_jacobian_batch(p, float(sign), out)
+    return _unbatch(out, lead, (3, 3))
+
+
+def so3_right_jacobian(phi):
+    """Right Jacobian ``J_r(phi) = I - (1-cos t)/t^2 K + (t - sin t)/t^3 K^2``, (..., 3) -> (..., 3, 3)."""
+    return _so3_jac(phi, -1, False)
+
+
+def so3_left_jacobian(phi):
+    """Left Jacobian ``J_l(phi) = J_r(-phi) = I + (1-cos t)/t^2 K + (t - sin t)/t^3 K^2``."""
+    return _so3_jac(phi, +1, False)
+
+
+def so3_right_jacobian_inv(phi):
+    """Inverse right Jacobian ``I + K/2 + (1/t^2 - cot(t/2)/(2t)) K^2`` (finite up to |phi| < 2 pi)."""
+    return _so3_jac(phi, -1, True)
+
+
+def so3_left_jacobian_inv(phi):
+    """Inverse left Jacobian ``I - K/2 + (1/t^2 - cot(t/2)/(2t)) K^2``."""
+    return _so3_jac(phi, +1, True)
+
+
+# --------------------------------------------------------------------------------- SE3
+
+
+def se3_hat(xi):
+    """(..., 6) ``[rho, phi]`` -> (..., 4, 4) twist matrix ``[[phi]x, rho; 0, 0]``."""
+    x, lead = _as_batch(xi, (6,), "xi")
+    out = np.zeros((x.shape[0], 4, 4))
+    out[:, :3, :3] = so3_hat(x[:, 3:])
+    out[:, :3, 3] = x[:, :3]
+    return _unbatch(out, lead, (4, 4))
+
+
+def se3_vee(X):
+    """Inverse of :func:`se3_hat`: (..., 4, 4) -> (..., 6) ``[rho, phi]``."""
+    M, lead = _as_batch(X, (4, 4), "X")
+    out = np.concatenate([M[:, :3, 3], so3_vee(M[:, :3, :3])], axis=1)
+    return _unbatch(out, lead, (6,))
+
+
+def se3_exp(xi):
+    """Exponential map of ``xi = [rho, phi]`` (..., 6) -> (..., 4, 4): ``(Exp(phi), J_l(phi) rho)``."""
+    x, lead = _as_batch(xi, (6,), "xi")
+    out = np.empty((x.shape[0], 4, 4))
+    _k.se3_exp_batch(x, out)
+    return _unbatch(out, lead, (4, 4))
+
+
+def se3_log(T):
+    """Logarithm map (..., 4, 4) -> (..., 6) ``[rho, phi]``, ``|phi| <= pi``."""
+    M, lead = _as_batch(T, (4, 4), "T")
+    out = np.empty((M.shape[0], 6))
+    _k.se3_log_batch(M, out)
+    return _unbatch(out, lead, (6,))
+
+
+def se3_compose(T_ab, T_bc):
+    """``a_T_c = a_T_b @ b_T_c``."""
+    return np.matmul(np.asarray(T_ab, dtype=np.float64), np.asarray(T_bc, dtype=np.float64))
+
+
+def se3_inverse(T):
+    """Inverse of poses (..., 4, 4): ``(R^T, -R^T t)``."""
+    M = np.asarray(T, dtype=np.float64)
+    out = np.zeros_like(M)
+    Rt = np.swapaxes(M[..., :3, :3], -1, -2)
+    out[..., :3, :3] = Rt
+    out[..., :3, 3] = -np.einsum("...ij,...j->...i", Rt, M[..., :3, 3])
+    out[..., 3, 3] = 1.0
+    return out
+
+
+def se3_act(T, p):
+    """Transform points: ``R p + t`` for (..., 4, 4) and (..., 3), broadcasting."""
+    M = np.asarray(T, dtype=np.float64)
+    return np.einsum("...ij,...j->...i", M[..., :3, :3], np.asarray(p, dtype=np.float64)) + M[..., :3, 3]
+
+
+def se3_adjoint(T):
+    """Adjoint (..., 6, 6) for ``[rho, phi]``: ``[[R, [t]x R], [0, R]]``, so that
+    ``T Exp(xi) T^-1 = Exp(Ad_T xi)``."""
+    M, lead = _as_batch(T, (4, 4), "T")
+    R = M[:, :3, :3]
+    out = np.zeros((M.shape[0], 6, 6))
+    out[:, :3, :3] = R
+    out[:, 3:, 3:] = R
+    out[:, :3, 3:] = np.matmul(so3_hat(M[:, :3, 3]), R)
+    return _unbatch(out, lead, (6, 6))
+
+
+def _se3_jac(xi, sign, inverse):
+    x, lead = _as_batch(xi, (6,), "xi")
+    out = np.empty((x.shape[0], 6, 6))
+    if inverse:
+        _k.se3_jacobian_inv_batch(x, float(sign), out)
+    else:
+        _k.se3_jacobian_batch(x, float(sign), out)
+    return _unbatch(out, lead, (6, 6))
+
+
+def se3_left_jacobian(xi):
+    """Left Jacobian of SE3, (..., 6) -> (..., 6, 6): ``[[J_l(phi), Q(rho, phi)], [0, J_l(phi)]]``."""
+    return _se3_jac(xi, +1, False)
+
+
+def se3_right_jacobian(xi):
+    """Right Jacobian of SE3, ``J_r(xi) = J_l(-xi)``."""
+    return _se3_jac(xi, -1, False)
+
+
+def se3_left_jacobian_inv(xi):
+    """Inverse of :func:`se3_left_jacobian`."""
+    return _se3_jac(xi, +1, True)
+
+
+def se3_right_jacobian_inv(xi):
+    """Inverse of :func:`se3_right_jacobian`."""
+    return _se3_jac(xi, -1, True)
+
+
+# --------------------------------------------------------------------------- quaternions
+
+
+def _check_quat_norm(q, name):
+    n = np.linalg.norm(q, axis=-1)
+    bad = ~np.isfinite(n) | (n < 1e-12)
+    if np.any(bad):
+        i = int(np.flatnonzero(bad)[0])
+        raise SplineImuError(f"`{name}` row {i} is not a valid quaternion (norm {n[i]:g})")
+
+
+def quat_normalize(quat_xyzw):
+    """Unit quaternions; raises on a zero or non-finite norm."""
+    q, lead = _as_batch(quat_xyzw, (4,), "quat_xyzw")
+    _check_quat_norm(q, "quat_xyzw")
+    return _unbatch(q / np.linalg.norm(q, axis=1, keepdims=True), lead, (4,))
+
+
+def quat_xyzw_to_matrix(quat_xyzw):
+    """Rotation matrices of quaternions (normalized first), (..., 4) -> (..., 3, 3)."""
+    q, lead = _as_batch(quat_xyzw, (4,), "quat_xyzw")
+    _check_quat_norm(q, "quat_xyzw")
+    out = np.empty((q.shape[0], 3, 3))
+    _k.quat_wxyz_to_mat_batch(np.ascontiguousarray(q[:, [3, 0, 1, 2]]), out)
+    return _unbatch(out, lead, (3, 3))
+
+
+def matrix_to_quat_xyzw(R):
+    """Unit quaternions with ``w >= 0`` of rotation matrices, (..., 3, 3) -> (..., 4)."""
+    M, lead = _as_batch(R, (3, 3), "R")
+    wxyz = np.empty((M.shape[0], 4))
+    _k.mat_to_quat_wxyz_batch(M, wxyz)
+    return _unbatch(np.ascontiguousarray(wxyz[:, [1, 2, 3, 0]]), lead, (4,))
+
+
+def quat_make_continuous(quat_xyzw):
+    """Flip signs so that consecutive quaternions (N, 4) have a non-negative dot product.
+
+    ``q`` and ``-q`` are the same rotation; differencing or interpolating a sequence needs
+    the representative that is closest to its predecessor.
+    """
+    q, _ = _as_batch(quat_xyzw, (4,), "quat_xyzw")
+    if q.shape[0] == 0:
+        return q
+    d = np.einsum("ij,ij->i", q[1:], q[:-1])
+    flips = np.concatenate([[1.0], np.cumprod(np.where(d < 0.0, -1.0, 1.0))])
+    return q * flips[:, None]
