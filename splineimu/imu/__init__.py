@@ -1,0 +1,1 @@
+"""IMU synthesis: ideal measurements from motion, and the shared sensor model."""

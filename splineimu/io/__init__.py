@@ -1,0 +1,1 @@
+"""File formats: TUM, EuRoC, ROS bags, output folders."""
