@@ -1,0 +1,354 @@
+"""Evaluation kernels of cumulative uniform B-splines (split R3 x SO3 and SE3).
+
+Derivatives follow the O(k) recursion of Sommer et al. (CVPR 2020): with
+``A_j = Exp(Btilde_j(u) d_j)`` and ``T(t) = T_i A_1 ... A_{k-1}``,
+
+    w_{j+1}    = A_j^-1 . w_j + Btilde_j' d_j
+    wdot_{j+1} = A_j^-1 . wdot_j + Btilde_j'' d_j + ad(A_j^-1 . w_j) (Btilde_j' d_j)
+
+where ``.`` is the adjoint action (``R^T w`` on SO3), primes are time derivatives and
+``ad(a) b = a x b`` on SO3, ``[phi_a x rho_b + rho_a x phi_b, phi_a x phi_b]`` on SE3.
+
+Inputs are prepared by :mod:`splineimu.spline.core`: ``s`` = (t - t_min) / dt per sample,
+control rotations ``Rc`` (n, 3, 3), per-knot increments ``D`` (n, 3) or (n, 6) with
+``D[m] = Log(T_{m-1}^-1 T_m)`` (``D[0]`` unused), cumulative blending matrix ``Mc``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .._jit import jit
+from .lie import mat_to_quat_wxyz_into, so3_exp_into, so3_jacobian_into
+
+WANT_ROT = 1
+WANT_POS = 2
+WANT_OMEGA = 4
+WANT_ALPHA = 8
+WANT_VEL = 16
+WANT_ACC = 32
+WANT_FORCE = 64
+WANT_QUAT = 128
+
+
+@jit
+def _segment(s, nseg):
+    seg = int(math.floor(s))
+    if seg < 0:
+        seg = 0
+    elif seg > nseg - 1:
+        seg = nseg - 1
+    return seg, s - seg
+
+
+@jit
+def _basis_rows(Mc, M, u, inv_dt, b, bd, bdd, pb, pbd, pbdd):
+    """Cumulative (b*) and plain (pb*) basis values with time derivatives."""
+    k = Mc.shape[0]
+    for j in range(k):
+        s0 = 0.0
+        s1 = 0.0
+        s2 = 0.0
+        p0 = 0.0
+        p1 = 0.0
+        p2 = 0.0
+        un = 1.0  # u^n
+        un1 = 0.0  # n u^(n-1)
+        un2 = 0.0  # n (n-1) u^(n-2)
+        um1 = 0.0  # u^(n-1)
+        um2 = 0.0  # u^(n-2)
+        for n in range(k):
+            if n >= 1:
+                um2 = um1
+                um1 = un
+                un = un * u
+                un1 = n * um1
+                un2 = n * (n - 1) * um2 if n >= 2 else 0.0
+            s0 += Mc[j, n] * un
+            s1 += Mc[j, n] * un1
+            s2 += Mc[j, n] * un2
+            p0 += M[j, n] * un
+            p1 += M[j, n] * un1
+            p2 += M[j, n] * un2
+        b[j] = s0
+        bd[j] = s1 * inv_dt
+        bdd[j] = s2 * inv_dt * inv_dt
+        pb[j] = p0
+        pbd[j] = p1 * inv_dt
+        pbdd[j] = p2 * inv_dt * inv_dt
+
+
+@jit
+def eval_split(s_all, nseg, dt, Rc, D, Pc, Mc, M, g, want,
+               out_R, out_q, out_p, out_w, out_wd, out_v, out_a, out_f):
+    """Split spline: cumulative SO3 rotation, ordinary R3 position. Writes the wanted outputs."""
+    k = Mc.shape[0]
+    inv_dt = 1.0 / dt
+    b = np.empty(k)
+    bd = np.empty(k)
+    bdd = np.empty(k)
+    pb = np.empty(k)
+    pbd = np.empty(k)
+    pbdd = np.empty(k)
+    R = np.empty((3, 3))
+    A = np.empty((3, 3))
+    T = np.empty((3, 3))
+    q = np.empty(4)
+    need_rot = (want & (WANT_ROT | WANT_QUAT | WANT_FORCE)) != 0
+    need_w = (want & (WANT_OMEGA | WANT_ALPHA)) != 0
+    need_wd = (want & WANT_ALPHA) != 0
+    for i in range(s_all.shape[0]):
+        seg, u = _segment(s_all[i], nseg)
+        _basis_rows(Mc, M, u, inv_dt, b, bd, bdd, pb, pbd, pbdd)
+        for r in range(3):
+            for c in range(3):
+                R[r, c] = Rc[seg, r, c]
+        w0 = 0.0
+        w1 = 0.0
+        w2 = 0.0
+        a0 = 0.0
+        a1 = 0.0
+        a2 = 0.0
+        for j in range(1, k):
+            d0 = D[seg + j, 0]
+            d1 = D[seg + j, 1]
+            d2 = D[seg + j, 2]
+            so3_exp_into(b[j] * d0, b[j] * d1, b[j] * d2, A)
+            if need_rot:
+                for r in range(3):
+                    x0 = R[r, 0]
+                    x1 = R[r, 1]
+                    x2 = R[r, 2]
+                    T[r, 0] = x0 * A[0, 0] + x1 * A[1, 0] + x2 * A[2, 0]
+                    T[r, 1] = x0 * A[0, 1] + x1 * A[1, 1] + x2 * A[2, 1]
+                    T[r, 2] = x0 * A[0, 2] + x1 * A[1, 2] + x2 * A[2, 2]
+                for r in range(3):
+                    R[r, 0] = T[r, 0]
+                    R[r, 1] = T[r, 1]
+                    R[r, 2] = T[r, 2]
+            if need_w:
+                # A^T w
+                r0 = A[0, 0] * w0 + A[1, 0] * w1 + A[2, 0] * w2
+                r1 = A[0, 1] * w0 + A[1, 1] * w1 + A[2, 1] * w2
+                r2 = A[0, 2] * w0 + A[1, 2] * w1 + A[2, 2] * w2
+                e0 = bd[j] * d0
+                e1 = bd[j] * d1
+                e2 = bd[j] * d2
+                if need_wd:
+                    y0 = A[0, 0] * a0 + A[1, 0] * a1 + A[2, 0] * a2
+                    y1 = A[0, 1] * a0 + A[1, 1] * a1 + A[2, 1] * a2
+                    y2 = A[0, 2] * a0 + A[1, 2] * a1 + A[2, 2] * a2
+                    a0 = y0 + bdd[j] * d0 + (r1 * e2 - r2 * e1)
+                    a1 = y1 + bdd[j] * d1 + (r2 * e0 - r0 * e2)
+                    a2 = y2 + bdd[j] * d2 + (r0 * e1 - r1 * e0)
+                w0 = r0 + e0
+                w1 = r1 + e1
+                w2 = r2 + e2
+        # position and its derivatives
+        p0 = 0.0
+        p1 = 0.0
+        p2 = 0.0
+        v0 = 0.0
+        v1 = 0.0
+        v2 = 0.0
+        c0 = 0.0
+        c1 = 0.0
+        c2 = 0.0
+        for j in range(k):
+            x0 = Pc[seg + j, 0]
+            x1 = Pc[seg + j, 1]
+            x2 = Pc[seg + j, 2]
+            p0 += pb[j] * x0
+            p1 += pb[j] * x1
+            p2 += pb[j] * x2
+            v0 += pbd[j] * x0
+            v1 += pbd[j] * x1
+            v2 += pbd[j] * x2
+            c0 += pbdd[j] * x0
+            c1 += pbdd[j] * x1
+            c2 += pbdd[j] * x2
+        if want & WANT_ROT:
+            for r in range(3):
+                for c in range(3):
+                    out_R[i, r, c] = R[r, c]
+        if want & WANT_QUAT:
+            mat_to_quat_wxyz_into(R, q)
+            out_q[i, 0] = q[1]
+            out_q[i, 1] = q[2]
+            out_q[i, 2] = q[3]
+            out_q[i, 3] = q[0]
+        if want & WANT_POS:
+            out_p[i, 0] = p0
+            out_p[i, 1] = p1
+            out_p[i, 2] = p2
+        if want & WANT_OMEGA:
+            out_w[i, 0] = w0
+            out_w[i, 1] = w1
+            out_w[i, 2] = w2
+        if want & WANT_ALPHA:
+            out_wd[i, 0] = a0
+            out_wd[i, 1] = a1
+            out_wd[i, 2] = a2
+        if want & WANT_VEL:
+            out_v[i, 0] = v0
+            out_v[i, 1] = v1
+            out_v[i, 2] = v2
+        if want & WANT_ACC:
+            out_a[i, 0] = c0
+            out_a[i, 1] = c1
+            out_a[i, 2] = c2
+        if want & WANT_FORCE:
+            f0 = c0 - g[0]
+            f1 = c1 - g[1]
+            f2 = c2 - g[2]
+            out_f[i, 0] = R[0, 0] * f0 + R[1, 0] * f1 + R[2, 0] * f2
+            out_f[i, 1] = R[0, 1] * f0 + R[1, 1] * f1 + R[2, 1] * f2
+            out_f[i, 2] = R[0, 2] * f0 + R[1, 2] * f1 + R[2, 2] * f2
+
+
+@jit
+def eval_se3(s_all, nseg, dt, Rc, D, Pc, Mc, M, g, want,
+             out_R, out_q, out_p, out_w, out_wd, out_v, out_a, out_f):
+    """SE3 spline (Lovegrove et al.): cumulative products of SE3 exponentials.
+
+    ``D[m] = [rho, phi]`` increments; the body twist ``xi = (v_b, w_b)``.
+    """
+    k = Mc.shape[0]
+    inv_dt = 1.0 / dt
+    b = np.empty(k)
+    bd = np.empty(k)
+    bdd = np.empty(k)
+    pb = np.empty(k)
+    pbd = np.empty(k)
+    pbdd = np.empty(k)
+    R = np.empty((3, 3))
+    A = np.empty((3, 3))
+    J = np.empty((3, 3))
+    T = np.empty((3, 3))
+    q = np.empty(4)
+    need_alpha = (want & (WANT_ALPHA | WANT_ACC | WANT_FORCE)) != 0
+    for i in range(s_all.shape[0]):
+        seg, u = _segment(s_all[i], nseg)
+        _basis_rows(Mc, M, u, inv_dt, b, bd, bdd, pb, pbd, pbdd)
+        for r in range(3):
+            for c in range(3):
+                R[r, c] = Rc[seg, r, c]
+        p0 = Pc[seg, 0]
+        p1 = Pc[seg, 1]
+        p2 = Pc[seg, 2]
+        # twist (v: translational, w: rotational) and its derivative
+        v0 = v1 = v2 = 0.0
+        w0 = w1 = w2 = 0.0
+        dv0 = dv1 = dv2 = 0.0
+        dw0 = dw1 = dw2 = 0.0
+        for j in range(1, k):
+            bj = b[j]
+            rho0 = bj * D[seg + j, 0]
+            rho1 = bj * D[seg + j, 1]
+            rho2 = bj * D[seg + j, 2]
+            ph0 = bj * D[seg + j, 3]
+            ph1 = bj * D[seg + j, 4]
+            ph2 = bj * D[seg + j, 5]
+            so3_exp_into(ph0, ph1, ph2, A)
+            so3_jacobian_into(ph0, ph1, ph2, 1.0, J)
+            t0 = J[0, 0] * rho0 + J[0, 1] * rho1 + J[0, 2] * rho2
+            t1 = J[1, 0] * rho0 + J[1, 1] * rho1 + J[1, 2] * rho2
+            t2 = J[2, 0] * rho0 + J[2, 1] * rho1 + J[2, 2] * rho2
+            # pose: p += R t ; R = R A
+            p0 += R[0, 0] * t0 + R[0, 1] * t1 + R[0, 2] * t2
+            p1 += R[1, 0] * t0 + R[1, 1] * t1 + R[1, 2] * t2
+            p2 += R[2, 0] * t0 + R[2, 1] * t1 + R[2, 2] * t2
+            for r in range(3):
+                x0 = R[r, 0]
+                x1 = R[r, 1]
+                x2 = R[r, 2]
+                T[r, 0] = x0 * A[0, 0] + x1 * A[1, 0] + x2 * A[2, 0]
+                T[r, 1] = x0 * A[0, 1] + x1 * A[1, 1] + x2 * A[2, 1]
+                T[r, 2] = x0 * A[0, 2] + x1 * A[1, 2] + x2 * A[2, 2]
+            for r in range(3):
+                R[r, 0] = T[r, 0]
+                R[r, 1] = T[r, 1]
+                R[r, 2] = T[r, 2]
+            # Ad_{A^-1} xi = [A^T (v - t x w), A^T w]
+            x0 = v0 - (t1 * w2 - t2 * w1)
+            x1 = v1 - (t2 * w0 - t0 * w2)
+            x2 = v2 - (t0 * w1 - t1 * w0)
+            zv0 = A[0, 0] * x0 + A[1, 0] * x1 + A[2, 0] * x2
+            zv1 = A[0, 1] * x0 + A[1, 1] * x1 + A[2, 1] * x2
+            zv2 = A[0, 2] * x0 + A[1, 2] * x1 + A[2, 2] * x2
+            zw0 = A[0, 0] * w0 + A[1, 0] * w1 + A[2, 0] * w2
+            zw1 = A[0, 1] * w0 + A[1, 1] * w1 + A[2, 1] * w2
+            zw2 = A[0, 2] * w0 + A[1, 2] * w1 + A[2, 2] * w2
+            bdj = bd[j]
+            er0 = bdj * D[seg + j, 0]
+            er1 = bdj * D[seg + j, 1]
+            er2 = bdj * D[seg + j, 2]
+            ew0 = bdj * D[seg + j, 3]
+            ew1 = bdj * D[seg + j, 4]
+            ew2 = bdj * D[seg + j, 5]
+            if need_alpha:
+                x0 = dv0 - (t1 * dw2 - t2 * dw1)
+                x1 = dv1 - (t2 * dw0 - t0 * dw2)
+                x2 = dv2 - (t0 * dw1 - t1 * dw0)
+                yv0 = A[0, 0] * x0 + A[1, 0] * x1 + A[2, 0] * x2
+                yv1 = A[0, 1] * x0 + A[1, 1] * x1 + A[2, 1] * x2
+                yv2 = A[0, 2] * x0 + A[1, 2] * x1 + A[2, 2] * x2
+                yw0 = A[0, 0] * dw0 + A[1, 0] * dw1 + A[2, 0] * dw2
+                yw1 = A[0, 1] * dw0 + A[1, 1] * dw1 + A[2, 1] * dw2
+                yw2 = A[0, 2] * dw0 + A[1, 2] * dw1 + A[2, 2] * dw2
+                bddj = bdd[j]
+                # ad(z) e = [zw x er + zv x ew, zw x ew]
+                dv0 = yv0 + bddj * D[seg + j, 0] + (zw1 * er2 - zw2 * er1) + (zv1 * ew2 - zv2 * ew1)
+                dv1 = yv1 + bddj * D[seg + j, 1] + (zw2 * er0 - zw0 * er2) + (zv2 * ew0 - zv0 * ew2)
+                dv2 = yv2 + bddj * D[seg + j, 2] + (zw0 * er1 - zw1 * er0) + (zv0 * ew1 - zv1 * ew0)
+                dw0 = yw0 + bddj * D[seg + j, 3] + (zw1 * ew2 - zw2 * ew1)
+                dw1 = yw1 + bddj * D[seg + j, 4] + (zw2 * ew0 - zw0 * ew2)
+                dw2 = yw2 + bddj * D[seg + j, 5] + (zw0 * ew1 - zw1 * ew0)
+            v0 = zv0 + er0
+            v1 = zv1 + er1
+            v2 = zv2 + er2
+            w0 = zw0 + ew0
+            w1 = zw1 + ew1
+            w2 = zw2 + ew2
+        # world velocity R v_b; world acceleration R (w x v + dv)
+        if want & WANT_ROT:
+            for r in range(3):
+                for c in range(3):
+                    out_R[i, r, c] = R[r, c]
+        if want & WANT_QUAT:
+            mat_to_quat_wxyz_into(R, q)
+            out_q[i, 0] = q[1]
+            out_q[i, 1] = q[2]
+            out_q[i, 2] = q[3]
+            out_q[i, 3] = q[0]
+        if want & WANT_POS:
+            out_p[i, 0] = p0
+            out_p[i, 1] = p1
+            out_p[i, 2] = p2
+        if want & WANT_OMEGA:
+            out_w[i, 0] = w0
+            out_w[i, 1] = w1
+            out_w[i, 2] = w2
+        if want & WANT_ALPHA:
+            out_wd[i, 0] = dw0
+            out_wd[i, 1] = dw1
+            out_wd[i, 2] = dw2
+        if want & WANT_VEL:
+            out_v[i, 0] = R[0, 0] * v0 + R[0, 1] * v1 + R[0, 2] * v2
+            out_v[i, 1] = R[1, 0] * v0 + R[1, 1] * v1 + R[1, 2] * v2
+            out_v[i, 2] = R[2, 0] * v0 + R[2, 1] * v1 + R[2, 2] * v2
+        if want & (WANT_ACC | WANT_FORCE):
+            ab0 = (w1 * v2 - w2 * v1) + dv0
+            ab1 = (w2 * v0 - w0 * v2) + dv1
+            ab2 = (w0 * v1 - w1 * v0) + dv2
+            if want & WANT_ACC:
+                out_a[i, 0] = R[0, 0] * ab0 + R[0, 1] * ab1 + R[0, 2] * ab2
+                out_a[i, 1] = R[1, 0] * ab0 + R[1, 1] * ab1 + R[1, 2] * ab2
+                out_a[i, 2] = R[2, 0] * ab0 + R[2, 1] * ab1 + R[2, 2] * ab2
+            if want & WANT_FORCE:
+                # f_b = R^T (a_w - g) = a_b - R^T g
+                out_f[i, 0] = ab0 - (R[0, 0] * g[0] + R[1, 0] * g[1] + R[2, 0] * g[2])
+                out_f[i, 1] = ab1 - (R[0, 1] * g[0] + R[1, 1] * g[1] + R[2, 1] * g[2])
+                out_f[i, 2] = ab2 - (R[0, 2] * g[0] + R[1, 2] * g[1] + R[2, 2] * g[2])
