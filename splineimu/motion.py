@@ -69,7 +69,7 @@ class MotionSource:
     def t_s_from_ns(self, t_ns) -> np.ndarray:
         """Seconds in this source's time base from integer nanoseconds (exact subtraction)."""
         t = np.asarray(t_ns, dtype=np.int64) - np.int64(self.origin_ns)
-        return t.astype(np.float64) * 1e-9
+        return t.astype(np.float64) / 1e9
 
     def check_times(self, t_s, name: str = "t_s") -> np.ndarray:
         """Return ``t_s`` as a 1-D float64 array; raise :class:`RangeError` outside the range."""
