@@ -1,0 +1,434 @@
+"""Least-squares fit of a cumulative B-spline to timestamped poses.
+
+Problem (weights ``w``, control poses ``T_i``)::
+
+    min  sum_m w_m |Log(T(t_m)^-1 T_m)|^2  +  mu * smoothness(T_i)
+
+- ``kind="split"``: the position part is linear (ordinary B-spline), solved directly from its
+  banded normal equations; the rotation part is a Gauss-Newton / Levenberg-Marquardt problem
+  on SO3 with right-perturbation updates ``R_i <- R_i Exp(delta_i)``.
+- ``kind="se3"``: Gauss-Newton / LM on SE3 residuals ``[rho, phi]``, started from the split fit.
+
+Every residual touches ``k`` consecutive control points, so the normal matrix is block banded
+with ``k`` blocks of bandwidth; it is solved with a banded Cholesky factorization
+(:func:`scipy.linalg.solveh_banded`), never densely. The smoothness term penalizes
+third differences of the control positions and second differences of the rotation increments
+(Eilers & Marx's P-spline penalty); a tiny default keeps segments without data (gaps)
+well-posed and bridges them smoothly.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+from scipy.linalg import solveh_banded
+
+from .. import lie
+from .._kernels import fit as _kf
+from ..errors import SplineImuError
+from .basis import blending_matrix
+from .core import KINDS, Spline
+
+#: Relative weight of the default smoothness penalty (keeps gaps well-posed, negligible bias).
+DEFAULT_SMOOTHNESS = 1e-6
+
+
+@dataclass
+class FitReport:
+    """What a fit did: layout, residuals and solver statistics (SI units)."""
+
+    kind: str
+    order: int
+    knot_spacing_s: float
+    knot_spacing_source: str
+    n_poses: int
+    n_control: int
+    span_s: tuple
+    residual_position_rms_m: float
+    residual_position_max_m: float
+    residual_angle_rms_rad: float
+    residual_angle_max_rad: float
+    iterations: int
+    converged: bool
+    time_s: float
+    smoothness: float
+    dropped_poses: list = field(default_factory=list)
+    knot_choice: dict | None = None
+    notes: list = field(default_factory=list)
+
+    def to_dict(self) -> dict:
+        d = asdict(self)
+        d["span_s"] = list(self.span_s)
+        return d
+
+    def summary(self) -> str:
+        lines = [
+            f"spline        {self.kind}, order {self.order}, knot spacing {self.knot_spacing_s * 1e3:.3f} ms "
+            f"({self.knot_spacing_source}), {self.n_control} control poses",
+            f"fit residual  position rms {self.residual_position_rms_m * 1e3:.4f} mm "
+            f"(max {self.residual_position_max_m * 1e3:.4f} mm), angle rms "
+            f"{np.degrees(self.residual_angle_rms_rad):.5f} deg (max {np.degrees(self.residual_angle_max_rad):.5f} deg)",
+        ]
+        kc = self.knot_choice
+        if kc and kc.get("predicted_gyro_rms_rad_s") is not None:
+            lines.append(
+                f"predicted     gyro error ~{kc['predicted_gyro_rms_rad_s']:.2e} rad/s, accel error "
+                f"~{kc['predicted_accel_rms_m_s2']:.2e} m/s^2 (pose noise ~{kc['position_noise_m'] * 1e3:.3f} mm, "
+                f"~{np.degrees(kc['angle_noise_rad']):.4f} deg)"
+            )
+        return "\n".join(lines)
+
+
+def _validate(t_s, positions, quat_xyzw, weights):
+    t = np.ascontiguousarray(np.asarray(t_s, dtype=np.float64).reshape(-1))
+    P = np.ascontiguousarray(np.asarray(positions, dtype=np.float64))
+    q = np.asarray(quat_xyzw, dtype=np.float64)
+    if P.shape != (t.size, 3):
+        raise SplineImuError(f"Expected `positions` to have shape ({t.size}, 3), got {P.shape}")
+    if q.shape != (t.size, 4):
+        raise SplineImuError(f"Expected `quat_xyzw` to have shape ({t.size}, 4), got {q.shape}")
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(P)) and np.all(np.isfinite(q))):
+        raise SplineImuError("poses contain NaN or inf")
+    if t.size > 1 and np.any(np.diff(t) <= 0):
+        i = int(np.flatnonzero(np.diff(t) <= 0)[0])
+        raise SplineImuError(f"timestamps must be strictly increasing (pose {i + 1} at {t[i + 1]!r} s)")
+    R = lie.quat_xyzw_to_matrix(q)
+    if weights is None:
+        w = np.ones(t.size)
+    else:
+        w = np.ascontiguousarray(np.asarray(weights, dtype=np.float64).reshape(-1))
+        if w.shape != t.shape or np.any(~np.isfinite(w)) or np.any(w < 0):
+            raise SplineImuError("`weights` must be (N,) finite and non-negative")
+    return t, P, R, w
+
+
+def layout(t_first, t_last, knot_spacing_s, order):
+    """Knot layout covering [t_first, t_last] exactly: (t0, dt, n_segments, n_control)."""
+    span = float(t_last - t_first)
+    nseg = max(1, int(round(span / float(knot_spacing_s))))
+    dt = span / nseg if span > 0 else float(knot_spacing_s)
+    return float(t_first), dt, nseg, nseg + order - 1
+
+
+def _control_times(t0, dt, n, order):
+    """Time at the centre of each control point's support."""
+    return t0 + (np.arange(n) - (order - 2) / 2.0) * dt
+
+
+def _interp_rotations(t, R, tq):
+    from scipy.spatial.transform import Rotation, Slerp
+
+    tq = np.clip(tq, t[0], t[-1])
+    return Slerp(t, Rotation.from_matrix(R))(tq).as_matrix()
+
+
+def _solve_banded_blocks(H, rhs, damping=0.0):
+    """Solve the symmetric block-banded system (upper blocks H (n, k, d, d)) for rhs (n*d, ...)."""
+    n, k, d, _ = H.shape
+    if damping:
+        H = H.copy()
+        idx = np.arange(d)
+        H[:, 0, idx, idx] += damping * np.maximum(H[:, 0, idx, idx], 1e-12)
+    ab = np.zeros((k * d, n * d))
+    _kf.blocks_to_lapack_upper(np.ascontiguousarray(H), ab)
+    return solveh_banded(ab, rhs, lower=False, check_finite=False)
+
+
+def _difference_matrix_band(n, order_diff):
+    """Coefficients of the order-r difference operator: row j touches j .. j + r."""
+    c = np.array([1.0])
+    for _ in range(order_diff):
+        c = np.convolve(c, [-1.0, 1.0])
+    return c  # length r + 1
+
+
+def _add_position_penalty(Hs, mu, r):
+    """Add mu * D_r^T D_r to scalar banded blocks Hs (n, k)."""
+    n, k = Hs.shape
+    c = _difference_matrix_band(n, r)
+    L = c.size
+    if L > k or n < L:
+        return
+    for a in range(L):
+        for b in range(a, L):
+            Hs[a: n - L + 1 + a, b - a] += mu * c[a] * c[b]
+
+
+def _rotation_penalty(D, tangent_dim, mu, H, g, jac_inv):
+    """Linearized penalty mu * sum_j |d_{j+1} - d_j|^2 on the increments D (n, dim), D[0] unused.
+
+    d_j moves by Jr^-1(d_j) delta_j - Jl^-1(d_j) delta_{j-1}; jac_inv(x, side) gives those blocks.
+    """
+    n = D.shape[0]
+    if n < 3 or mu <= 0:
+        return 0.0
+    d = D[1:]
+    Jr_inv = jac_inv(d, "right")  # (n-1, dim, dim): block of delta_j for increment j (j = 1..n-1)
+    Jl_inv = jac_inv(d, "left")
+    e = d[1:] - d[:-1]  # (n-2, dim): e_j for j = 1 .. n-2, touches delta_{j-1}, delta_j, delta_{j+1}
+    B_prev = Jl_inv[:-1]  # + Jl^-1(d_j) on delta_{j-1}
+    B_mid = -Jl_inv[1:] - Jr_inv[:-1]  # on delta_j
+    B_next = Jr_inv[1:]  # on delta_{j+1}
+    blocks = (B_prev, B_mid, B_next)
+    j = np.arange(1, n - 1)
+    for a in range(3):
+        for b in range(a, 3):
+            contrib = mu * np.einsum("nzi,nzj->nij", blocks[a], blocks[b])
+            np.add.at(H, (j - 1 + a, b - a), contrib)
+        np.add.at(g, j - 1 + a, mu * np.einsum("nzi,nz->ni", blocks[a], e))
+    return float(mu * np.sum(e * e))
+
+
+def _so3_jac_inv(x, side):
+    return lie.so3_right_jacobian_inv(x) if side == "right" else lie.so3_left_jacobian_inv(x)
+
+
+def _se3_jac_inv(x, side):
+    return lie.se3_right_jacobian_inv(x) if side == "right" else lie.se3_left_jacobian_inv(x)
+
+
+def _increments_so3(Rc):
+    D = np.zeros((Rc.shape[0], 3))
+    D[1:] = lie.so3_log(np.matmul(np.swapaxes(Rc[:-1], 1, 2), Rc[1:]))
+    return D
+
+
+def _increments_se3(Rc, pc):
+    n = Rc.shape[0]
+    T = np.zeros((n - 1, 4, 4))
+    T[:, :3, :3] = np.matmul(np.swapaxes(Rc[:-1], 1, 2), Rc[1:])
+    T[:, :3, 3] = np.einsum("nji,nj->ni", Rc[:-1], pc[1:] - pc[:-1])
+    T[:, 3, 3] = 1.0
+    D = np.zeros((n, 6))
+    D[1:] = lie.se3_log(T)
+    return D
+
+
+class _Problem:
+    """One fit at a fixed knot layout."""
+
+    def __init__(self, t, P, R, w, order, t0, dt, nseg, smoothness, w_rot, w_pos):
+        self.t, self.P, self.R, self.w = t, P, R, w
+        self.order, self.t0, self.dt, self.nseg = order, t0, dt, nseg
+        self.n = nseg + order - 1
+        self.s = np.ascontiguousarray((t - t0) / dt)
+        self.M = blending_matrix(order)
+        self.Mc = blending_matrix(order, cumulative=True)
+        self.smoothness = smoothness
+        self.w_rot = w_rot
+        self.w_pos = w_pos
+        # penalty scale: data weight per control point
+        self.data_per_ctrl = max(float(np.sum(w)) / self.n, 1e-12)
+
+    # ------------------------------------------------------------------ position (split)
+    def solve_positions(self):
+        k, n = self.order, self.n
+        Hs = np.zeros((n, k))
+        rhs = np.zeros((n, 3))
+        w = self.w * self.w_pos
+        _kf.position_normal_equations(self.s, w, self.P, self.M, self.nseg, Hs, rhs)
+        mu = self.smoothness * self.data_per_ctrl * self.w_pos
+        _add_position_penalty(Hs, mu, min(3, k - 1))
+        ab = np.zeros((k, n))
+        for c in range(k):
+            ab[k - 1 - c, c:] = Hs[: n - c, c]
+        return solveh_banded(ab, rhs, lower=False, check_finite=False)
+
+    def position_residuals(self, Pc):
+        out = np.empty((self.t.size, 3))
+        _kf.position_residuals(self.s, self.P, Pc, self.M, self.nseg, out)
+        return out
+
+    # ------------------------------------------------------------------ rotation (split)
+    def _so3_system(self, Rc):
+        n, k = self.n, self.order
+        D = _increments_so3(Rc)
+        H = np.zeros((n, k, 3, 3))
+        g = np.zeros((n, 3))
+        res = np.empty((self.t.size, 3))
+        w = self.w * self.w_rot
+        cost = _kf.so3_normal_equations(self.s, w, self.R, Rc, D, self.Mc, self.nseg, H, g, res)
+        mu = self.smoothness * self.data_per_ctrl * self.w_rot
+        cost += _rotation_penalty(D, 3, mu, H, g, _so3_jac_inv)
+        return cost, H, g, res
+
+    def solve_rotations(self, Rc, max_iter=30, tol=1e-12, progress=None):
+        return self._gauss_newton(Rc, None, max_iter, tol, progress)
+
+    # ------------------------------------------------------------------ SE3
+    def _se3_system(self, Rc, pc):
+        n, k = self.n, self.order
+        D = _increments_se3(Rc, pc)
+        H = np.zeros((n, k, 6, 6))
+        g = np.zeros((n, 6))
+        res = np.empty((self.t.size, 6))
+        w6 = np.ascontiguousarray(np.column_stack([self.w * self.w_pos] * 3 + [self.w * self.w_rot] * 3))
+        cost = _kf.se3_normal_equations(self.s, w6, self.R, self.P, Rc, pc, D, self.Mc, self.nseg, H, g, res)
+        mu = self.smoothness * self.data_per_ctrl
+        # scale the penalty per component like the data weights
+        cost += _rotation_penalty(D, 6, mu * np.sqrt(self.w_pos * self.w_rot), H, g, _se3_jac_inv)
+        return cost, H, g, res
+
+    def _gauss_newton(self, Rc, pc, max_iter, tol, progress):
+        se3 = pc is not None
+        system = (lambda: self._se3_system(Rc, pc)) if se3 else (lambda: self._so3_system(Rc))
+        cost, H, g, res = system()
+        lam = 0.0
+        it = 0
+        converged = False
+        for it in range(1, max_iter + 1):
+            delta = _solve_banded_blocks(H, -g.reshape(-1), damping=lam).reshape(g.shape)
+            if se3:
+                T = lie.se3_exp(delta)
+                pc_new = pc + np.einsum("nij,nj->ni", Rc, T[:, :3, 3])
+                Rc_new = np.matmul(Rc, T[:, :3, :3])
+                cost_new, H_new, g_new, res_new = self._se3_system(Rc_new, pc_new)
+            else:
+                Rc_new = np.matmul(Rc, lie.so3_exp(delta))
+                cost_new, H_new, g_new, res_new = self._so3_system(Rc_new)
+            if progress is not None:
+                progress(it)
+            if cost_new <= cost * (1 + 1e-12) or not np.isfinite(cost):
+                small = np.abs(delta).max() < 1e-13 or (cost - cost_new) <= tol * max(cost, 1e-300)
+                Rc, cost, H, g, res = Rc_new, cost_new, H_new, g_new, res_new
+                if se3:
+                    pc = pc_new
+                lam = lam / 10 if lam > 1e-9 else 0.0
+                if small:
+                    converged = True
+                    break
+            else:
+                lam = 1e-4 if lam == 0 else lam * 10
+                if lam > 1e8:
+                    break
+        return (Rc, pc, res, it, converged) if se3 else (Rc, res, it, converged)
+
+
+def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="auto", *, weights=None,
+        smoothness=DEFAULT_SMOOTHNESS, origin_ns=0, max_iter=30, progress=False, return_report=False):
+    """Least-squares B-spline through timestamped poses ``world_T_body``.
+
+    Parameters
+    ----------
+    t_s : (N,) array_like
+        Strictly increasing pose times, seconds since ``origin_ns``.
+    positions : (N, 3) array_like
+    quat_xyzw : (N, 4) array_like
+        Any sign, not necessarily unit (normalized; a zero quaternion is an error).
+    kind : {"split", "se3"}
+    order : int or "auto"
+        Spline order (4 = cubic). ``"auto"`` (default) compares 4, 5 and 6 by their predicted
+        synthesis error and takes the best; an integer fixes it.
+    knot_spacing_s : float or "auto"
+        Knot spacing [s]; ``"auto"`` chooses it from the data (:mod:`splineimu.spline.knots`).
+    weights : (N,) array_like, optional
+        Per-pose weights (0 drops a pose from the data term).
+    smoothness : float
+        Relative weight of the P-spline difference penalty (see module notes).
+    origin_ns : int
+        Integer-nanosecond origin of the time base.
+    progress : bool
+        Show a progress bar for long fits.
+    return_report : bool
+        Return ``(spline, FitReport)`` instead of the spline alone.
+
+    Returns
+    -------
+    Spline, or (Spline, FitReport)
+        The spline covers exactly ``[t_s[0], t_s[-1]]``.
+
+    Raises
+    ------
+    SplineImuError
+        Bad shapes, unsorted or non-finite input, too few poses for the order.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.linspace(0, 2, 201)
+    >>> pos = np.c_[np.sin(t), np.cos(t), t]
+    >>> quat = np.c_[np.zeros((201, 2)), np.sin(t / 2), np.cos(t / 2)]
+    >>> spl = fit(t, pos, quat, knot_spacing_s=0.05)
+    >>> bool(np.abs(spl.angular_velocity_body([1.0])[0] - [0, 0, 1]).max() < 1e-6)
+    True
+    """
+    t0_wall = time.perf_counter()
+    kind = str(kind).lower()
+    if kind not in KINDS:
+        raise SplineImuError(f"spline kind must be one of {KINDS}, got {kind!r}")
+    auto_order = isinstance(order, str)
+    if auto_order and order != "auto":
+        raise SplineImuError(f"order must be an integer or 'auto', got {order!r}")
+    if not auto_order:
+        order = int(order)
+    t, P, R, w = _validate(t_s, positions, quat_xyzw, weights)
+    if t.size < 2:
+        raise SplineImuError(f"too few poses to fit: got {t.size}, need at least 2")
+    knot_choice = None
+    if isinstance(knot_spacing_s, str) and knot_spacing_s != "auto":
+        try:
+            knot_spacing_s = float(knot_spacing_s)
+        except ValueError:
+            raise SplineImuError(f"knot spacing must be a number or 'auto', got {knot_spacing_s!r}") from None
+    if isinstance(knot_spacing_s, str) or auto_order:
+        from .knots import choose_knot_spacing
+
+        cands = None if isinstance(knot_spacing_s, str) else np.array([float(knot_spacing_s)])
+        knot_choice = choose_knot_spacing(t, P, R, order=order, candidates=cands)
+        order = int(knot_choice["order"])
+    if isinstance(knot_spacing_s, str):
+        dt_req = knot_choice["knot_spacing_s"]
+        source = "auto"
+    else:
+        dt_req = float(knot_spacing_s)
+        if not (np.isfinite(dt_req) and dt_req > 0):
+            raise SplineImuError(f"knot spacing must be positive, got {knot_spacing_s!r}")
+        source = "given"
+    t0, dt, nseg, n = layout(t[0], t[-1], dt_req, order)
+    if knot_choice is not None:
+        sig_p = max(knot_choice.get("position_noise_m", 0.0), 1e-6)
+        sig_r = max(knot_choice.get("angle_noise_rad", 0.0), 1e-6)
+    else:
+        sig_p, sig_r = 1e-3, 1e-3
+    prob = _Problem(t, P, R, w, order, t0, dt, nseg, float(smoothness), 1.0 / sig_r**2, 1.0 / sig_p**2)
+
+    bar = None
+    if progress:
+        from tqdm import tqdm
+
+        bar = tqdm(total=max_iter, desc="fit", unit="it", leave=False)
+
+    def tick(_it):
+        if bar is not None:
+            bar.update(1)
+
+    tc = _control_times(t0, dt, n, order)
+    Rc = _interp_rotations(t, R, tc)
+    Pc = prob.solve_positions()
+    Rc, res_rot, iters, conv = prob.solve_rotations(Rc, max_iter=max_iter, progress=tick)
+    res_pos = prob.position_residuals(Pc)
+    if kind == "se3":
+        Rc, Pc, res6, it2, conv = prob._gauss_newton(Rc, Pc, max_iter, 1e-12, tick)
+        iters += it2
+        spl = Spline(t0, dt, Pc, Rc, kind, order, origin_ns)
+        p_fit, q_fit = spl.pose(t)
+        res_pos = P - p_fit
+        res_rot = lie.so3_log(np.matmul(np.swapaxes(lie.quat_xyzw_to_matrix(q_fit), 1, 2), R))
+    else:
+        spl = Spline(t0, dt, Pc, Rc, kind, order, origin_ns)
+    if bar is not None:
+        bar.close()
+    ep = np.linalg.norm(res_pos, axis=1)
+    ea = np.linalg.norm(res_rot, axis=1)
+    report = FitReport(
+        kind=kind, order=order, knot_spacing_s=dt, knot_spacing_source=source, n_poses=int(t.size),
+        n_control=n, span_s=(float(t[0]), float(t[-1])),
+        residual_position_rms_m=float(np.sqrt(np.mean(ep**2))), residual_position_max_m=float(ep.max()),
+        residual_angle_rms_rad=float(np.sqrt(np.mean(ea**2))), residual_angle_max_rad=float(ea.max()),
+        iterations=iters, converged=bool(conv), time_s=time.perf_counter() - t0_wall,
+        smoothness=float(smoothness), knot_choice=knot_choice,
+    )
+    spl.fit_report = report
+    return (spl, report) if return_report else spl
