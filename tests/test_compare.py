@@ -1,0 +1,256 @@
+"""`splineimu compare` / splineimu.metrics against evo's own evo_ape / evo_rpe."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import logging
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import require_shared
+
+from splineimu import cli
+from splineimu.errors import ConfigError, InputError, SplineImuError
+from splineimu.lie import matrix_to_quat_xyzw, quat_xyzw_to_matrix, so3_exp
+from splineimu.metrics import EVO_MISSING, compare
+from splineimu.scenes import make_scene
+
+pytest.importorskip("evo")
+
+
+def run_evo(tool, argv):
+    """Run evo_ape / evo_rpe's own CLI code in-process; return what it prints."""
+    if tool == "ape":
+        from evo.cli import ape as mod
+        from evo.cli import ape_parser as par
+    else:
+        from evo.cli import rpe as mod
+        from evo.cli import rpe_parser as par
+    args = par.parser().parse_args(argv)
+    # evo's configure_logging replaces only the first handler of the "evo" logger; under pytest
+    # that may be a capture handler, so start from none (as a fresh evo_ape process does).
+    lg = logging.getLogger("evo")
+    saved = lg.handlers[:]
+    lg.handlers.clear()
+    buf = io.StringIO()
+    try:
+        with contextlib.redirect_stdout(buf):
+            mod.run(args)
+    finally:
+        lg.handlers[:] = saved
+    return buf.getvalue()
+
+
+def write_tum(path, t, p, q):
+    with open(path, "w") as fh:
+        fh.write("# timestamp tx ty tz qx qy qz qw\n")
+        for i in range(len(t)):
+            fh.write(" ".join(repr(float(x)) for x in (t[i], *p[i], *q[i])) + "\n")
+    return path
+
+
+def perturbed(t, p, q, rng, *, scale=1.07, pos_noise=0.05, rot_noise=0.02, t_jitter=0.003, step=1):
+    """An 'estimate': every `step`-th pose, noisy, in another frame, with scale and stamp jitter."""
+    idx = np.arange(0, len(t), step)
+    R = quat_xyzw_to_matrix(q[idx]) @ so3_exp(rng.normal(scale=rot_noise, size=(idx.size, 3)))
+    pn = p[idx] + rng.normal(scale=pos_noise, size=(idx.size, 3))
+    Rg = so3_exp(np.array([0.2, -0.4, 1.1]))
+    tg = np.array([3.0, -2.0, 0.5]) + p[0]
+    p_est = scale * pn @ Rg.T + tg
+    R_est = Rg @ R
+    return t[idx] + rng.uniform(-t_jitter, t_jitter, idx.size), p_est, matrix_to_quat_xyzw(R_est)
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    d = tmp_path_factory.mktemp("cmp")
+    scene = make_scene("ellipse", duration_s=20.0, t0_ns=1_600_000_000_000_000_000)
+    t_ns = scene.sample_times_ns(50.0)
+    k = scene.kinematics(scene.t_s_from_ns(t_ns))
+    t = t_ns / 1e9
+    ref = write_tum(d / "ref.tum", t, k.position_world, k.quat_xyzw)
+    rng = np.random.default_rng(5)
+    te, pe, qe = perturbed(t, k.position_world, k.quat_xyzw, rng, step=2)
+    est = write_tum(d / "est.tum", te, pe, qe)
+    shifted = write_tum(d / "est_shifted.tum", te + 0.51, pe, qe)  # half a ref step off
+    return {"ref": str(ref), "est": str(est), "shifted": str(shifted), "dir": d}
+
+
+EVO_RELATION = {"trans": "trans_part", "rot": "rot_part", "full": "full", "angle_deg": "angle_deg",
+                "angle_rad": "angle_rad", "point_distance": "point_distance"}
+EVO_ALIGN = {"none": [], "se3": ["-a"], "sim3": ["-a", "-s"], "origin": ["--align_origin"]}
+
+
+@pytest.mark.parametrize("align", ["none", "se3", "sim3", "origin"])
+@pytest.mark.parametrize("relation", ["trans", "rot", "full", "angle_deg"])
+def test_ape_equals_evo_ape(files, align, relation):
+    ours = compare(files["est"], files["ref"], metric="ape", pose_relation=relation, align=align)
+    theirs = run_evo("ape", ["tum", files["ref"], files["est"], "-r", EVO_RELATION[relation],
+                             *EVO_ALIGN[align]])
+    assert ours.ape.pretty_str() + "\n" == theirs
+    assert ours.n_associated == 501
+
+
+@pytest.mark.parametrize(
+    "align, relation, delta, unit, extra",
+    [
+        ("none", "trans", 1, "f", []),
+        ("se3", "trans", 10, "f", []),
+        ("sim3", "trans", 2.0, "m", []),
+        ("se3", "angle_deg", 5, "f", ["--all_pairs"]),
+        ("origin", "rot", 20.0, "d", []),
+        ("none", "full", 0.5, "r", []),
+        ("sim3", "point_distance", 25, "f", []),
+    ],
+)
+def test_rpe_equals_evo_rpe(files, align, relation, delta, unit, extra):
+    ours = compare(files["est"], files["ref"], metric="rpe", pose_relation=relation, align=align,
+                   delta=delta, delta_unit=unit, all_pairs=bool(extra))
+    theirs = run_evo("rpe", ["tum", files["ref"], files["est"], "-r", EVO_RELATION[relation],
+                             *EVO_ALIGN[align], "-d", str(delta), "-u", unit, *extra])
+    assert ours.rpe.pretty_str() + "\n" == theirs
+    assert ours.rpe.errors.size == ours.rpe.timestamps_s.size > 0
+
+
+def test_full_precision_equals_evo_library(files):
+    # beyond the printed digits: the same floats as evo's main_ape / main_rpe
+    from evo.core import metrics as em
+    from evo.core import sync
+    from evo.main_ape import ape
+    from evo.main_rpe import rpe
+    from evo.tools import file_interface
+
+    ours = compare(files["est"], files["ref"], metric="both", align="sim3", delta=5)
+    for fn, kw, mine in ((ape, {}, ours.ape), (rpe, {"delta": 5, "delta_unit": em.Unit.frames}, ours.rpe)):
+        r, e = sync.associate_trajectories(file_interface.read_tum_trajectory_file(files["ref"]),
+                                           file_interface.read_tum_trajectory_file(files["est"]))
+        res = fn(r, e, em.PoseRelation.translation_part, align=True, correct_scale=True, **kw)
+        assert res.stats == mine.stats
+        np.testing.assert_array_equal(res.np_arrays["error_array"], mine.errors)
+    a = ours.alignment_sim3
+    s = np.cbrt(np.linalg.det(a[:3, :3]))
+    assert abs(s - 1 / 1.07) < 0.01  # the scale put into the estimate is recovered
+
+
+def test_association_options_equal_evo(files):
+    for opts, evo_opts in (
+        ({"t_offset": -0.51}, ["--t_offset", "-0.51"]),
+        ({"t_offset": -0.51, "t_max_diff": 0.002}, ["--t_offset", "-0.51", "--t_max_diff", "0.002"]),
+    ):
+        ours = compare(files["shifted"], files["ref"], align="se3", **opts)
+        theirs = run_evo("ape", ["tum", files["ref"], files["shifted"], "-a", *evo_opts])
+        assert ours.ape.pretty_str() + "\n" == theirs
+    # fewer associations with the tighter window; none without the offset
+    n = compare(files["shifted"], files["ref"], t_offset=-0.51, t_max_diff=0.002).n_associated
+    assert 100 < n < 400  # stamps jitter +-3 ms
+    with pytest.raises(ConfigError, match="found no matching timestamps"):
+        compare(files["shifted"], files["ref"], t_max_diff=0.005)  # all 10 +- 3 ms off
+
+
+def test_delta_in_seconds_is_frames(files):
+    ours = compare(files["est"], files["ref"], metric="rpe", delta=1.0, delta_unit="s")
+    assert ours.rpe.delta_frames == 25  # est poses every 40 ms
+    theirs = run_evo("rpe", ["tum", files["ref"], files["est"], "-d", "25", "-u", "f"])
+    assert ours.rpe.pretty_str() + "\n" == theirs
+    d = files["dir"]
+    t = np.r_[np.arange(10) * 0.1, 1.0 + np.arange(10) * 0.3]
+    p, q = np.zeros((20, 3)), np.tile([0.0, 0.0, 0.0, 1.0], (20, 1))
+    p[:, 0] = t
+    uneven = write_tum(d / "uneven.tum", t, p, q)
+    with pytest.raises(ConfigError, match="evenly spaced"):
+        compare(str(uneven), str(uneven), metric="rpe", delta=1.0, delta_unit="s")
+
+
+def test_cli_matches_evo_executables(files, capsys):
+    """The whole chain: `splineimu compare` output vs the evo_ape / evo_rpe programs."""
+    rc = cli.main(["compare", files["est"], files["ref"], "--metric", "both", "--align", "sim3",
+                   "--pose-relation", "angle_deg", "--delta", "3", "--delta-unit", "m"])
+    assert rc == 0
+    ours = capsys.readouterr().out
+    bindir = Path(sys.executable).parent
+    outs = []
+    for tool, extra in (("evo_ape", []), ("evo_rpe", ["-d", "3", "-u", "m"])):
+        exe = bindir / tool
+        if not exe.exists():
+            pytest.skip(f"{exe} not found")
+        proc = subprocess.run([str(exe), "tum", files["ref"], files["est"], "-a", "-s", "-r", "angle_deg",
+                               *extra, "--no_warnings"], capture_output=True, text=True, timeout=120)
+        assert proc.returncode == 0, proc.stderr
+        outs.append(proc.stdout)
+    assert ours == "".join(outs)
+
+
+def test_plot(files, tmp_path, capsys):
+    png = tmp_path / "cmp.png"
+    assert cli.main(["compare", files["est"], files["ref"], "--metric", "both", "--align", "se3",
+                     "--plot", str(png)]) == 0
+    assert "plot saved to" in capsys.readouterr().out
+    data = png.read_bytes()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 20_000
+
+
+def test_trajectory_objects_and_tuples(files):
+    # in-memory input: integrate-like objects or tuples give the same numbers as the files
+    from evo.tools import file_interface
+
+    tr = file_interface.read_tum_trajectory_file(files["est"])
+    rf = file_interface.read_tum_trajectory_file(files["ref"])
+    est = (tr.timestamps, tr.positions_xyz, tr.orientations_quat_wxyz[:, [1, 2, 3, 0]])
+    ref = (rf.timestamps, rf.positions_xyz, rf.orientations_quat_wxyz[:, [1, 2, 3, 0]])
+    a = compare(est, ref, metric="both", align="se3")
+    b = compare(files["est"], files["ref"], metric="both", align="se3")
+    assert a.ape.stats == b.ape.stats and a.rpe.stats == b.rpe.stats
+    # known answer: a constant 0.1 m offset, unaligned
+    t = np.arange(10.0)
+    p = np.c_[t, np.zeros(10), np.zeros(10)]
+    q = np.tile([0.0, 0.0, 0.0, 1.0], (10, 1))
+    r = compare((t, p + [0.0, 0.1, 0.0], q), (t, p, q), metric="both")
+    assert abs(r.ape.stats["rmse"] - 0.1) < 1e-15 and r.rpe.stats["max"] < 1e-15
+
+
+def test_errors(files, tmp_path, capsys, monkeypatch):
+    with pytest.raises(InputError, match="no such file"):
+        compare(str(tmp_path / "missing.tum"), files["ref"])
+    bad = tmp_path / "bad.tum"
+    bad.write_text("1.0 2 3\n")
+    with pytest.raises(InputError, match="8 entries per row"):
+        compare(str(bad), files["ref"])
+    assert cli.main(["compare", str(bad), files["ref"]]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("splineimu compare: error: ") and err.count("\n") == 1
+    with pytest.raises(ConfigError, match="produced an empty index list"):
+        compare(files["est"], files["ref"], metric="rpe", delta=1e6, delta_unit="m")
+    with pytest.raises(ConfigError, match="whole number"):
+        compare(files["est"], files["ref"], metric="rpe", delta=1.5, delta_unit="f")
+    with pytest.raises(ConfigError, match="Unknown alignment"):
+        compare(files["est"], files["ref"], align="umeyama")
+    # evo missing -> the install hint
+    for mod in [m for m in sys.modules if m == "evo" or m.startswith("evo.")]:
+        monkeypatch.delitem(sys.modules, mod)
+    monkeypatch.setitem(sys.modules, "evo", None)
+    with pytest.raises(SplineImuError) as exc:
+        compare(files["est"], files["ref"])
+    assert str(exc.value) == EVO_MISSING == "splineimu compare needs evo: pip install 'splineimu[evo]'"
+
+
+@pytest.mark.parametrize("name", ["misc/georeferenced.tum", "tum_rgbd/freiburg1_xyz-groundtruth.txt"])
+def test_real_trajectories_equal_evo(name, tmp_path):
+    """Real reference files (evo's georeferenced test data: UTM-sized coordinates; TUM RGB-D fr1_xyz,
+    CC BY 4.0) against a perturbed copy, for every alignment."""
+    ref = require_shared(*name.split("/"))
+    from evo.tools import file_interface
+
+    tr = file_interface.read_tum_trajectory_file(str(ref))
+    rng = np.random.default_rng(11)
+    t, p, q = perturbed(tr.timestamps, tr.positions_xyz, tr.orientations_quat_wxyz[:, [1, 2, 3, 0]], rng,
+                        pos_noise=0.01, t_jitter=0.002)
+    est = write_tum(tmp_path / "est.tum", t, p, q)
+    for align in ("none", "se3", "sim3", "origin"):
+        ours = compare(str(est), str(ref), metric="both", align=align, delta=2)
+        theirs = run_evo("ape", ["tum", str(ref), str(est), *EVO_ALIGN[align]])
+        theirs += run_evo("rpe", ["tum", str(ref), str(est), *EVO_ALIGN[align], "-d", "2"])
+        assert ours.pretty_str() + "\n" == theirs
