@@ -1,0 +1,225 @@
+"""``splineimu preintegrate``: preintegrate an output folder's IMU and compare with ground truth."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+NAME = "preintegrate"
+HELP = "preintegrate an output folder's IMU over windows and compare the deltas with ground truth"
+ORDER = 55
+DESCRIPTION = """\
+VINS-style preintegration (splineimu.preintegration) of OUT/imu0/data.csv over windows, compared
+with the exact deltas of OUT/state_groundtruth_estimate0/data.csv (EuRoC 17 columns: ns, p xyz,
+q w x y z, v xyz, b_w xyz, b_a xyz). Each window is linearized at the ground-truth biases at its
+start, so the errors are what the noise (and the bias drift inside the window) leaves.
+
+Windows: every N IMU samples (--every, default: about 1 s of samples), or between consecutive
+stamps of a file (--stamps; first column, ns or s, e.g. a camera's data.csv). IMU samples at
+window bounds that fall between samples are interpolated linearly; ground truth between its
+stamps is interpolated (slerp for the rotation).
+
+With noise densities (--imu, default OUT/imu.yaml when it exists; Kalibr keys, plain or under
+imu0 as in a Kalibr imu chain) the table also has each window's 9-dof NEES of the
+(p, theta, v) error and a summary against the chi-square interval.
+
+Example:
+  splineimu preintegrate out --every 200
+  splineimu preintegrate out --stamps cam0_stamps.csv --imu imu.yaml -o windows.csv
+"""
+
+KALIBR_KEYS = ("gyroscope_noise_density", "accelerometer_noise_density",
+               "gyroscope_random_walk", "accelerometer_random_walk")
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument("out_folder", metavar="OUT_FOLDER",
+                        help="folder with imu0/data.csv and state_groundtruth_estimate0/data.csv")
+    win = parser.add_mutually_exclusive_group()
+    win.add_argument("--every", type=int, metavar="N", default=None,
+                     help="window length in IMU samples (default: about 1 s)")
+    win.add_argument("--stamps", metavar="FILE", default=None,
+                     help="window bounds: first column of FILE, ns (integers) or s (decimals)")
+    parser.add_argument("--imu", metavar="IMU.yaml", default=None,
+                        help="Kalibr noise parameters for the covariance and NEES "
+                             "(default: OUT_FOLDER/imu.yaml if present)")
+    parser.add_argument("--method", choices=("midpoint", "euler"), default="midpoint",
+                        help="discretization (default: midpoint)")
+    parser.add_argument("--covariance", choices=("consistent", "vins"), default="consistent",
+                        help="noise model of the covariance (default: consistent)")
+    parser.add_argument("--gravity", nargs=3, type=float, metavar=("GX", "GY", "GZ"),
+                        default=(0.0, 0.0, -9.81), help="world gravity [m/s^2] (default: 0 0 -9.81)")
+    parser.add_argument("--imu-csv", metavar="CSV", default=None,
+                        help="IMU csv instead of OUT_FOLDER/imu0/data.csv")
+    parser.add_argument("--groundtruth", metavar="CSV", default=None,
+                        help="ground truth instead of OUT_FOLDER/state_groundtruth_estimate0/data.csv")
+    parser.add_argument("--all", action="store_true", help="print every window (default: at most 40)")
+    parser.add_argument("-o", "--output", metavar="CSV", default=None, help="also write the table as csv")
+
+
+# ----------------------------------------------------------------------------- readers
+
+
+def read_euroc_groundtruth(path):
+    """EuRoC ground truth -> (t_ns, p, quat_xyzw, v, b_w, b_a); plain pandas reader."""
+    import numpy as np
+    import pandas as pd
+
+    from ..errors import InputError
+
+    path = Path(path)
+    if not path.is_file():
+        raise InputError("file not found", path)
+    try:
+        df = pd.read_csv(path, comment="#", header=None, skip_blank_lines=True, dtype=str)
+    except Exception as e:  # noqa: BLE001
+        raise InputError(f"cannot read as csv: {e}", path) from None
+    if df.shape[0] == 0:
+        raise InputError("no data rows", path)
+    if df.shape[1] < 17:
+        raise InputError(f"expected 17 columns (ns, p xyz, q wxyz, v xyz, b_w xyz, b_a xyz), got {df.shape[1]}",
+                         path)
+    try:
+        t_ns = np.array([int(s.strip()) for s in df.iloc[:, 0]], dtype=np.int64)
+        v = df.iloc[:, 1:17].astype(np.float64).to_numpy()
+    except ValueError as e:
+        raise InputError(f"not a number: {e}", path) from None
+    if not np.all(np.isfinite(v)):
+        raise InputError("contains NaN or inf", path)
+    bad = np.flatnonzero(np.diff(t_ns) <= 0)
+    if bad.size:
+        raise InputError(f"time stamps must increase ({t_ns[bad[0] + 1]} after {t_ns[bad[0]]})", path)
+    return (t_ns, v[:, 0:3].copy(), np.ascontiguousarray(v[:, [4, 5, 6, 3]]), v[:, 7:10].copy(),
+            v[:, 10:13].copy(), v[:, 13:16].copy())
+
+
+def read_noise_yaml(path) -> dict:
+    """Kalibr noise keys from an imu.yaml (top level, or the first mapping that has them)."""
+    import yaml
+
+    from ..errors import ConfigError, InputError
+
+    path = Path(path)
+    if not path.is_file():
+        raise ConfigError(f"noise file not found: {path}")
+    text = path.read_text(encoding="utf-8")
+    lines = text.splitlines()
+    if lines and lines[0].startswith("%YAML:"):  # OpenCV-style header of Kalibr chains
+        text = "\n".join(lines[1:])
+    try:
+        doc = yaml.safe_load(text)
+    except yaml.YAMLError as e:
+        raise InputError(f"not valid yaml: {e}", path) from None
+
+    def find(d):
+        if isinstance(d, dict):
+            if all(k in d for k in KALIBR_KEYS):
+                return d
+            for v in d.values():
+                r = find(v)
+                if r is not None:
+                    return r
+        return None
+
+    found = find(doc)
+    if found is None:
+        raise ConfigError(f"{path}: needs the Kalibr keys {', '.join(KALIBR_KEYS)}")
+    out = {}
+    for k in KALIBR_KEYS:
+        try:
+            out[k] = float(found[k])
+        except (TypeError, ValueError):
+            raise ConfigError(f"{path}: `{k}` must be a number, got {found[k]!r}") from None
+        if not out[k] >= 0:
+            raise ConfigError(f"{path}: `{k}` must be >= 0, got {found[k]!r}")
+    return out
+
+
+def make_windows(imu_t_ns, gt_t_ns, every=None, stamps_ns=None):
+    """(W, 2) int64 windows inside both the IMU and the ground-truth spans."""
+    import numpy as np
+
+    from ..errors import ConfigError
+
+    lo = max(int(imu_t_ns[0]), int(gt_t_ns[0]))
+    hi = min(int(imu_t_ns[-1]), int(gt_t_ns[-1]))
+    if stamps_ns is not None:
+        s = np.asarray(stamps_ns, dtype=np.int64)
+        s = s[(s >= lo) & (s <= hi)]
+        if s.size < 2:
+            raise ConfigError(f"fewer than 2 stamps inside the IMU and ground-truth span [{lo}, {hi}] ns")
+        return np.stack([s[:-1], s[1:]], axis=1)
+    t = imu_t_ns[(imu_t_ns >= lo) & (imu_t_ns <= hi)]
+    if t.size < 2:
+        raise ConfigError("fewer than 2 IMU samples inside the ground truth's span")
+    if every is None:
+        every = max(1, int(round(1e9 / float(np.median(np.diff(t))))))
+    if every < 1:
+        raise ConfigError(f"--every must be >= 1, got {every}")
+    idx = np.arange(0, t.size, every)
+    if idx.size < 2:
+        raise ConfigError(f"--every {every} is longer than the {t.size} usable IMU samples")
+    return np.stack([t[idx[:-1]], t[idx[1:]]], axis=1)
+
+
+# ----------------------------------------------------------------------------- run
+
+
+def run(args) -> int:
+    import numpy as np
+    from scipy import stats
+
+    from ..errors import ConfigError
+    from ..io.imu_csv import read_imu_csv
+    from ..preintegration import evaluate_windows
+
+    out = Path(args.out_folder)
+    imu_path = Path(args.imu_csv) if args.imu_csv else out / "imu0" / "data.csv"
+    gt_path = Path(args.groundtruth) if args.groundtruth else out / "state_groundtruth_estimate0" / "data.csv"
+    for p, what in ((imu_path, "IMU csv"), (gt_path, "ground truth")):
+        if not p.is_file():
+            raise ConfigError(f"{what} not found: {p}")
+    noise_path = Path(args.imu) if args.imu else (out / "imu.yaml" if (out / "imu.yaml").is_file() else None)
+    noise = read_noise_yaml(noise_path) if noise_path is not None else None
+
+    t_ns, gyro, accel = read_imu_csv(imu_path)
+    gt = read_euroc_groundtruth(gt_path)
+    stamps = None
+    if args.stamps:
+        from ..io.timestamps import read_timestamps
+
+        stamps = read_timestamps(args.stamps)
+    windows = make_windows(t_ns, gt[0], every=args.every, stamps_ns=stamps)
+    res = evaluate_windows(t_ns, gyro, accel, gt[0], gt[1], gt[2], gt[3], gt[4], gt[5], windows,
+                           noise=noise, method=args.method, covariance=args.covariance,
+                           gravity=args.gravity)
+    df = res.to_dataframe()
+    print(f"{len(df)} windows, {args.method} / {args.covariance}; noise: "
+          f"{noise_path if noise is not None else 'none (no NEES)'}")
+    t0 = int(windows[0, 0])
+    show = df.copy()
+    show.insert(0, "t_i_s", (show["t_i_ns"] - t0) * 1e-9)
+    show = show.drop(columns=["t_i_ns", "t_j_ns"])
+    if noise is None:
+        show = show.drop(columns=["nees9"])
+    fmt = {"t_i_s": "{:.3f}".format, "dt_s": "{:.4f}".format, "err_p_m": "{:.3e}".format,
+           "err_v_m_s": "{:.3e}".format, "err_theta_deg": "{:.3e}".format, "nees9": "{:.2f}".format}
+    lines = show.to_string(index=False, formatters=fmt).splitlines()
+    limit = None if args.all else 40
+    if limit is not None and len(lines) - 1 > limit:
+        half = limit // 2
+        lines = lines[: 1 + half] + [f"... {len(lines) - 1 - limit} windows not shown (--all) ..."] + lines[-half:]
+    print("\n".join(lines))
+    print(f"max error: p {df['err_p_m'].max():.3e} m, v {df['err_v_m_s'].max():.3e} m/s, "
+          f"theta {df['err_theta_deg'].max():.3e} deg")
+    if noise is not None:
+        n = len(df)
+        lo, hi = stats.chi2.ppf([0.025, 0.975], 9 * n) / n
+        m = float(np.mean(res.nees))
+        verdict = "inside" if lo <= m <= hi else "OUTSIDE"
+        print(f"mean NEES {m:.3f} (9 dof; 95% interval for {n} windows [{lo:.3f}, {hi:.3f}]: {verdict})")
+    if args.output:
+        from ..io.output import atomic_write_text
+
+        dest = atomic_write_text(args.output, df.to_csv(index=False))
+        print(f"table -> {dest}")
+    return 0
