@@ -143,7 +143,8 @@ def write_output(syn: Synthesis, out_dir, *, force=False, report: dict | None = 
     with OutputFolder(out_dir, force=force) as tmp:
         (tmp / "imu0").mkdir()
         (tmp / "state_groundtruth_estimate0").mkdir()
-        write_euroc_imu(tmp / "imu0" / "data.csv", syn.t_ns, syn.gyro_rad_s, syn.accel_m_s2)
+        # (+ 0.0 turns -0.0 into 0.0 in the text)
+        write_euroc_imu(tmp / "imu0" / "data.csv", syn.t_ns, syn.gyro_rad_s + 0.0, syn.accel_m_s2 + 0.0)
         write_euroc_groundtruth(tmp / "state_groundtruth_estimate0" / "data.csv", syn.t_ns,
                                 syn.ideal.position_world, syn.ideal.quat_xyzw, syn.ideal.velocity_world,
                                 syn.bias_gyro_rad_s, syn.bias_accel_m_s2)

@@ -29,7 +29,7 @@ def add_pose_args(p, fmt_help):
                    help="longest gap bridged silently (default 0.5 s, or 5x the median spacing if larger)")
     g.add_argument("--gaps", choices=["error", "bridge", "split"], default="error",
                    help="longer gaps: stop (default), fit through them, or write one folder per piece")
-    from ._common import add_output_args as _  # noqa: F401  (keeps import order obvious)
+    add_output_args(p)
 
 
 def _parse_order(v):
