@@ -32,7 +32,7 @@ from .basis import blending_matrix
 from .core import KINDS, Spline
 
 #: Relative weight of the default smoothness penalty (keeps gaps well-posed, negligible bias).
-DEFAULT_SMOOTHNESS = 1e-6
+DEFAULT_SMOOTHNESS = 1e-10
 
 
 @dataclass
@@ -406,12 +406,17 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
 
     tc = _control_times(t0, dt, n, order)
     Rc = _interp_rotations(t, R, tc)
-    Pc = prob.solve_positions()
-    Rc, res_rot, iters, conv = prob.solve_rotations(Rc, max_iter=max_iter, progress=tick)
-    res_pos = prob.position_residuals(Pc)
-    if kind == "se3":
-        Rc, Pc, res6, it2, conv = prob._gauss_newton(Rc, Pc, max_iter, 1e-12, tick)
-        iters += it2
+    try:
+        Pc = prob.solve_positions()
+        Rc, res_rot, iters, conv = prob.solve_rotations(Rc, max_iter=max_iter, progress=tick)
+        res_pos = prob.position_residuals(Pc)
+        if kind == "se3":
+            Rc, Pc, res6, it2, conv = prob._gauss_newton(Rc, Pc, max_iter, 1e-12, tick)
+            iters += it2
+    except np.linalg.LinAlgError:
+        raise SplineImuError(
+            f"the fit is singular at knot spacing {dt:g} s with smoothness {smoothness:g}: use a larger "
+            "knot spacing or a positive smoothness") from None
         spl = Spline(t0, dt, Pc, Rc, kind, order, origin_ns)
         p_fit, q_fit = spl.pose(t)
         res_pos = P - p_fit

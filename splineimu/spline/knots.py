@@ -183,7 +183,7 @@ def choose_knot_spacing(t, P, R, order=4, candidates=None):
     f_g, S_g, sig_r = _derivative_spectrum(Tu, rs, 1)
     spec_a, spec_g = (f_a, S_a), (f_g, S_g)
     if candidates is None:
-        lo = med
+        lo = 2.0 * med
         hi = max(min(span / 4.0, 2.0), lo * 1.01)
         candidates = np.geomspace(lo, hi, 20)
     orders = [4, 5, 6] if order == "auto" else [int(order)]

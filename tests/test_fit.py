@@ -1,0 +1,209 @@
+"""Spline fitting: Jacobians against finite differences, accuracy on analytic scenes."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from splineimu import Spline, SplineImuError, fit, lie
+from splineimu._kernels import fit as _kf
+from splineimu.scenes import make_scene
+from splineimu.spline.basis import blending_matrix
+from splineimu.spline.fit import _increments_se3, _increments_so3
+
+ELLIPSE = make_scene("ellipse", duration_s=30.0)
+
+
+def ellipse_poses(rate, pos_noise=0.0, ang_noise=0.0, seed=0, duration=30.0):
+    t = np.arange(0.0, duration + 1e-9, 1.0 / rate)
+    k = ELLIPSE.kinematics(t)
+    rng = np.random.default_rng(seed)
+    p = k.position_world + pos_noise * rng.normal(size=k.position_world.shape)
+    R = k.world_R_body
+    if ang_noise:
+        R = R @ lie.so3_exp(ang_noise * rng.normal(size=(t.size, 3)))
+    return t, p, lie.matrix_to_quat_xyzw(R)
+
+
+def imu_errors(spl, t0, t1, step=0.005):
+    t = np.arange(t0, t1, step)
+    g, f = spl.imu(t)
+    g0, f0 = ELLIPSE.imu(t)
+    rms = lambda e: float(np.sqrt(np.mean(np.sum(e**2, axis=1))))  # noqa: E731
+    return rms(g - g0), rms(f - f0)
+
+
+# ------------------------------------------------------------------ Jacobians (gradients)
+def _small_problem(kind, seed=0):
+    rng = np.random.default_rng(seed)
+    n, k, dt = 8, 4, 0.2
+    Rc = lie.so3_exp(rng.normal(size=(n, 3)) * 0.8)
+    pc = rng.normal(size=(n, 3))
+    nseg = n - k + 1
+    s = np.sort(rng.uniform(0, nseg, 40))
+    Rm = lie.so3_exp(rng.normal(size=(40, 3)))
+    pm = rng.normal(size=(40, 3))
+    return Rc, pc, s, Rm, pm, k, nseg
+
+
+def _so3_cost(Rc, s, Rm, k, nseg):
+    n = Rc.shape[0]
+    H = np.zeros((n, k, 3, 3))
+    g = np.zeros((n, 3))
+    res = np.empty((s.size, 3))
+    c = _kf.so3_normal_equations(s, np.ones(s.size), Rm, Rc, _increments_so3(Rc), blending_matrix(k, True),
+                                 nseg, H, g, res)
+    return c, g
+
+
+def test_rotation_gradient_matches_finite_differences():
+    """g = J^T r must equal half the gradient of the cost under R_i <- R_i Exp(d)."""
+    Rc, _, s, Rm, _, k, nseg = _small_problem("split")
+    _, g = _so3_cost(Rc, s, Rm, k, nseg)
+    num = np.zeros_like(g)
+    h = 1e-6
+    for i in range(Rc.shape[0]):
+        for a in range(3):
+            d = np.zeros(3)
+            d[a] = h
+            Rp, Rn = Rc.copy(), Rc.copy()
+            Rp[i] = Rc[i] @ lie.so3_exp(d)
+            Rn[i] = Rc[i] @ lie.so3_exp(-d)
+            num[i, a] = (_so3_cost(Rp, s, Rm, k, nseg)[0] - _so3_cost(Rn, s, Rm, k, nseg)[0]) / (2 * h) / 2
+    np.testing.assert_allclose(g, num, rtol=1e-6, atol=1e-7 * np.abs(num).max())
+
+
+def _se3_cost(Rc, pc, s, Rm, pm, k, nseg):
+    n = Rc.shape[0]
+    H = np.zeros((n, k, 6, 6))
+    g = np.zeros((n, 6))
+    res = np.empty((s.size, 6))
+    w6 = np.ones((s.size, 6))
+    c = _kf.se3_normal_equations(s, w6, Rm, pm, Rc, pc, _increments_se3(Rc, pc), blending_matrix(k, True),
+                                 nseg, H, g, res)
+    return c, g
+
+
+def test_se3_gradient_matches_finite_differences():
+    Rc, pc, s, Rm, pm, k, nseg = _small_problem("se3", seed=1)
+    _, g = _se3_cost(Rc, pc, s, Rm, pm, k, nseg)
+    num = np.zeros_like(g)
+    h = 1e-6
+    for i in range(Rc.shape[0]):
+        for a in range(6):
+            d = np.zeros(6)
+            d[a] = h
+            out = []
+            for sgn in (1, -1):
+                T = lie.se3_exp(sgn * d)
+                R2, p2 = Rc.copy(), pc.copy()
+                p2[i] = pc[i] + Rc[i] @ T[:3, 3]
+                R2[i] = Rc[i] @ T[:3, :3]
+                out.append(_se3_cost(R2, p2, s, Rm, pm, k, nseg)[0])
+            num[i, a] = (out[0] - out[1]) / (2 * h) / 2
+    np.testing.assert_allclose(g, num, rtol=1e-6, atol=1e-7 * np.abs(num).max())
+
+
+# ----------------------------------------------------------------------- accuracy
+def test_clean_200hz_default_settings():
+    t, p, q = ellipse_poses(200)
+    spl, rep = fit(t, p, q, return_report=True)
+    eg, ea = imu_errors(spl, 1.0, 29.0)
+    assert eg <= 1e-5 and ea <= 1e-3, (eg, ea, rep.order, rep.knot_spacing_s)
+    # near the ends the errors stay within 10x of the interior figures
+    for a, b in ((0.0, 1.0), (29.0, 30.0)):
+        eg_end, ea_end = imu_errors(spl, a, b, 0.001)
+        assert eg_end <= 10 * max(eg, 1e-6) and ea_end <= 10 * max(ea, 1e-4), (a, eg_end, ea_end)
+    assert rep.residual_position_rms_m < 1e-6
+
+
+def test_clean_200hz_order6_fine_knots():
+    t, p, q = ellipse_poses(200)
+    spl = fit(t, p, q, order=6, knot_spacing_s=0.01)
+    eg, ea = imu_errors(spl, 1.0, 29.0)
+    assert eg <= 1e-8 and ea <= 1e-6, (eg, ea)
+
+
+def test_clean_30hz_default_settings():
+    t, p, q = ellipse_poses(30)
+    spl = fit(t, p, q)
+    eg, ea = imu_errors(spl, 1.0, 29.0)
+    assert eg <= 1e-4 and ea <= 1e-2, (eg, ea)
+
+
+def test_clean_cubic_is_far_better_than_poses_as_control_points():
+    """Using the poses themselves as control points (what OpenVINS/basalt do) vs a fit."""
+    t, p, q = ellipse_poses(200)
+    fitted = fit(t, p, q, order=4, knot_spacing_s=0.01)
+    step = 2  # every second pose as a control point at 0.01 s spacing
+    naive = Spline.from_control_points(t[0] - 0.01, 0.01, p[::step], q[::step], order=4)
+    _, ea_fit = imu_errors(fitted, 2.0, 28.0)
+    _, ea_naive = imu_errors(naive, 2.0, 28.0)
+    assert ea_naive > 30 * ea_fit, (ea_naive, ea_fit)
+
+
+def test_noisy_mocap_is_smoothed_near_the_best_fixed_spacing():
+    """1 mm / 0.1 deg noise at 200 Hz, no noise level given."""
+    t, p, q = ellipse_poses(200, 1e-3, np.radians(0.1), seed=3)
+    spl, rep = fit(t, p, q, return_report=True)
+    eg, ea = imu_errors(spl, 1.0, 29.0)
+    assert eg <= 3e-3 and ea <= 3e-2, (eg, ea, rep.order, rep.knot_spacing_s)
+    kc = rep.knot_choice
+    assert abs(kc["position_noise_m"] - 1e-3) < 1.5e-4
+    assert abs(kc["angle_noise_rad"] - np.radians(0.1)) < 3e-4
+    best = min(imu_errors(fit(t, p, q, order=rep.order, knot_spacing_s=ks), 1.0, 29.0)[1]
+               for ks in (0.2, 0.25, 0.3, 0.35, 0.4))
+    assert ea <= 1.3 * best, (ea, best)
+
+
+def test_se3_fit_of_a_screw_recovers_the_twist():
+    scene = make_scene("screw", duration_s=6.0)
+    t = np.arange(0, 6.0 + 1e-9, 0.01)
+    k = scene.kinematics(t)
+    spl = fit(t, k.position_world, k.quat_xyzw, kind="se3", order=4, knot_spacing_s=0.05)
+    ti = np.linspace(0.5, 5.5, 200)
+    w = spl.angular_velocity_body(ti)
+    np.testing.assert_allclose(w, scene.kinematics(ti).omega_body, atol=1e-6)
+    np.testing.assert_allclose(spl.acceleration_world(ti), scene.kinematics(ti).accel_world, atol=1e-4)
+
+
+def test_fit_bridges_a_gap_smoothly_and_covers_the_span():
+    t, p, q = ellipse_poses(100, duration=20.0)
+    keep = (t < 8.0) | (t > 9.0)
+    spl = fit(t[keep], p[keep], q[keep], order=4, knot_spacing_s=0.05)
+    assert spl.t_min_s == t[keep][0] and abs(spl.t_max_s - t[keep][-1]) < 1e-12
+    eg, ea = imu_errors(spl, 8.0, 9.0)
+    assert eg < 0.05 and ea < 3.0, (eg, ea)  # bridged, not wild
+
+
+def test_quaternion_sign_flips_in_the_input_do_not_matter():
+    t, p, q = ellipse_poses(50, duration=10.0)
+    flips = np.where(np.random.default_rng(0).random(t.size) < 0.5, -1.0, 1.0)
+    a = fit(t, p, q, order=4, knot_spacing_s=0.1)
+    b = fit(t, p, q * flips[:, None], order=4, knot_spacing_s=0.1)
+    ti = np.linspace(0, 10, 300)
+    np.testing.assert_allclose(a.imu(ti)[0], b.imu(ti)[0], atol=1e-12)
+
+
+def test_epoch_times_keep_precision():
+    t, p, q = ellipse_poses(100, duration=10.0)
+    origin = 1_403_636_579_758_555_392
+    spl = fit(t, p, q, order=4, knot_spacing_s=0.05, origin_ns=origin)
+    assert spl.origin_ns == origin
+    t_ns = origin + np.array([1_000_000_000, 5_000_000_001])
+    g = spl.imu(spl.t_s_from_ns(t_ns))[0]
+    np.testing.assert_allclose(g, ELLIPSE.imu([1.0, 5.000000001])[0], atol=1e-5)
+
+
+def test_fit_rejects_bad_input():
+    t, p, q = ellipse_poses(50, duration=2.0)
+    with pytest.raises(SplineImuError, match="strictly increasing"):
+        fit(t[::-1], p, q)
+    with pytest.raises(SplineImuError, match="NaN"):
+        p2 = p.copy()
+        p2[3, 0] = np.nan
+        fit(t, p2, q)
+    with pytest.raises(SplineImuError, match="quaternion"):
+        fit(t, p, np.zeros_like(q))
+    with pytest.raises(SplineImuError, match="too few poses"):
+        fit(t[:1], p[:1], q[:1])
