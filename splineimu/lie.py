@@ -310,14 +310,27 @@ def matrix_to_quat_xyzw(R):
 
 
 def quat_make_continuous(quat_xyzw):
-    """Flip signs so that consecutive quaternions (N, 4) have a non-negative dot product.
+    """Flip signs so that consecutive quaternions have a non-negative dot product.
 
     ``q`` and ``-q`` are the same rotation; differencing or interpolating a sequence needs
-    the representative that is closest to its predecessor.
+    the representative that is closest to its predecessor. The first quaternion keeps its sign.
+
+    Parameters
+    ----------
+    quat_xyzw : array_like, (N, 4) or (..., N, 4)
+        A sequence along the second-to-last axis (each leading index is its own sequence).
+        A single ``(4,)`` quaternion is returned unchanged.
+
+    Returns
+    -------
+    ndarray, same shape as ``quat_xyzw``; each row is ``+q`` or ``-q`` (not renormalized).
     """
-    q, _ = _as_batch(quat_xyzw, (4,), "quat_xyzw")
-    if q.shape[0] == 0:
+    q = np.array(quat_xyzw, dtype=np.float64)
+    if q.ndim == 0 or q.shape[-1] != 4:
+        raise SplineImuError(f"Expected `quat_xyzw` to have shape (N, 4), got {q.shape}")
+    if q.ndim == 1 or q.shape[-2] == 0:
         return q
-    d = np.einsum("ij,ij->i", q[1:], q[:-1])
-    flips = np.concatenate([[1.0], np.cumprod(np.where(d < 0.0, -1.0, 1.0))])
-    return q * flips[:, None]
+    d = np.einsum("...ij,...ij->...i", q[..., 1:, :], q[..., :-1, :])
+    step = np.where(d < 0.0, -1.0, 1.0)
+    flips = np.concatenate([np.ones(step.shape[:-1] + (1,)), np.cumprod(step, axis=-1)], axis=-1)
+    return q * flips[..., None]

@@ -17,11 +17,14 @@ from .._jit import jit
 EXP_SMALL_ANGLE = 1e-4
 #: Below this |v| / w Log uses its series (error ~ (n/w)^4).
 LOG_SMALL_ANGLE = 1e-6
-#: Below this angle the SO3 Jacobian coefficients use their Taylor series.
-JAC_SMALL_ANGLE = 1e-2
-#: Below this angle the SE3 Jacobian's Q-block coefficients use their Taylor series
-#: (their closed forms lose ~ 1e2 eps / theta^4 to cancellation).
-SE3_Q_SMALL_ANGLE = 1e-1
+#: Below this angle the SO3 Jacobian coefficients use their Taylor series (terms to t^8,
+#: error < 3e-18). The closed forms of (t - sin t)/t^3 and 1/t^2 - cot(t/2)/(2t) lose
+#: ~ eps / t^2 relative to cancellation, so the switch is made late (1e-2 left 4e-12).
+JAC_SMALL_ANGLE = 1e-1
+#: Below this angle the SE3 Jacobian's Q-block coefficients use their Taylor series (terms to
+#: t^12, error < 1e-18). Their closed forms lose ~ eps / t^4 to cancellation (in the Q block
+#: ~ eps / t: 1.5e-14 at 0.1, 6e-16 at 0.5), so the switch is made late.
+SE3_Q_SMALL_ANGLE = 0.5
 
 
 @jit
@@ -138,9 +141,9 @@ def so3_log_into(R, q_scratch, phi):
 def so3_jac_coeffs(t2):
     """(a, b, c) with sin t/t, (1 - cos t)/t^2, (t - sin t)/t^3 for t^2 = t2."""
     if t2 < JAC_SMALL_ANGLE * JAC_SMALL_ANGLE:
-        a = 1.0 - t2 / 6.0 + t2 * t2 / 120.0
-        b = 0.5 - t2 / 24.0 + t2 * t2 / 720.0
-        c = 1.0 / 6.0 - t2 / 120.0 + t2 * t2 / 5040.0
+        a = 1.0 - t2 / 6.0 * (1.0 - t2 / 20.0 * (1.0 - t2 / 42.0 * (1.0 - t2 / 72.0)))
+        b = 0.5 * (1.0 - t2 / 12.0 * (1.0 - t2 / 30.0 * (1.0 - t2 / 56.0 * (1.0 - t2 / 90.0))))
+        c = (1.0 - t2 / 20.0 * (1.0 - t2 / 42.0 * (1.0 - t2 / 72.0 * (1.0 - t2 / 110.0)))) / 6.0
     else:
         t = math.sqrt(t2)
         st = math.sin(t)
@@ -155,7 +158,9 @@ def so3_jac_coeffs(t2):
 def so3_jac_inv_coeff(t2):
     """1/t^2 - cot(t/2) / (2 t): the K^2 coefficient of the inverse Jacobians."""
     if t2 < JAC_SMALL_ANGLE * JAC_SMALL_ANGLE:
-        return 1.0 / 12.0 + t2 / 720.0 + t2 * t2 / 30240.0
+        # sum_n |B_2n| t^(2n-2) / (2n)!
+        return 1.0 / 12.0 + t2 * (1.0 / 720.0 + t2 * (1.0 / 30240.0 + t2 * (
+            1.0 / 1209600.0 + t2 / 47900160.0)))
     t = math.sqrt(t2)
     h = 0.5 * t
     return 1.0 / t2 - math.cos(h) / (2.0 * t * math.sin(h))
@@ -232,9 +237,13 @@ def se3_q_block_into(rho, phi, sign, Q, scratch):
     _hat_into(sign * rho[0], sign * rho[1], sign * rho[2], Rh)
     t2 = px * px + py * py + pz * pz
     if t2 < SE3_Q_SMALL_ANGLE * SE3_Q_SMALL_ANGLE:
-        c1 = 1.0 / 6.0 - t2 / 120.0 + t2 * t2 / 5040.0 - t2 * t2 * t2 / 362880.0
-        c2 = 1.0 / 24.0 - t2 / 720.0 + t2 * t2 / 40320.0 - t2 * t2 * t2 / 3628800.0
-        c4 = 1.0 / 120.0 - t2 / 2520.0 + t2 * t2 / 120960.0 - t2 * t2 * t2 / 9979200.0
+        # c1 = sum (-t2)^k / (2k+3)!, c2 = sum (-t2)^k / (2k+4)!, c4 = sum (-t2)^k (k+1) / (2k+5)!
+        c1 = (1.0 - t2 / 20.0 * (1.0 - t2 / 42.0 * (1.0 - t2 / 72.0 * (1.0 - t2 / 110.0 * (
+            1.0 - t2 / 156.0 * (1.0 - t2 / 210.0)))))) / 6.0
+        c2 = (1.0 - t2 / 30.0 * (1.0 - t2 / 56.0 * (1.0 - t2 / 90.0 * (1.0 - t2 / 132.0 * (
+            1.0 - t2 / 182.0 * (1.0 - t2 / 240.0)))))) / 24.0
+        c4 = (1.0 - t2 / 21.0 * (1.0 - t2 / 48.0 * (1.0 - t2 * (2.0 / 165.0) * (1.0 - t2 * (5.0 / 624.0) * (
+            1.0 - t2 / 175.0 * (1.0 - t2 * (7.0 / 1632.0))))))) / 120.0
     else:
         t = math.sqrt(t2)
         st = math.sin(t)
