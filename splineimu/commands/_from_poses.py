@@ -6,6 +6,9 @@ import time
 
 import numpy as np
 
+#: --gaps split: pieces with fewer poses are skipped (a spline of order 6 needs a few knots of data)
+MIN_PIECE_POSES = 12
+
 
 def add_pose_args(p, fmt_help):
     from ._common import add_imu_args, add_output_args
@@ -29,6 +32,11 @@ def add_pose_args(p, fmt_help):
                    help="longest gap bridged silently (default 0.5 s, or 5x the median spacing if larger)")
     g.add_argument("--gaps", choices=["error", "bridge", "split"], default="error",
                    help="longer gaps: stop (default), fit through them, or write one folder per piece")
+    g = p.add_argument_group("input hygiene")
+    g.add_argument("--repeated-stamps", choices=["error", "first"], default="error",
+                   help="a stamp repeated with a different pose: stop (default) or keep the first row")
+    g.add_argument("--keep-outliers", action="store_true",
+                   help="do not drop poses whose fit residual is beyond 8 robust sigmas")
     add_output_args(p)
 
 
@@ -74,12 +82,12 @@ def run_from_poses(args, read) -> int:
     fail_fast_output(args)
     order = _parse_order(args.order)
     knot = _parse_knot_spacing(args.knot_spacing)
-    track = read(args.poses)
+    track = read(args.poses, repeated_stamps=args.repeated_stamps)
     for note in track.notices:
         stderr(f"note: {args.poses}: {note}")
     med = float(np.median(np.diff(track.t_ns))) / 1e9
     max_gap = args.max_gap if args.max_gap is not None else max(0.5, 5.0 * med)
-    gaps = find_gaps(track.t_ns, max_gap)
+    gaps = find_gaps(track.t_ns, max_gap, getattr(track, "line_numbers", None))
     if gaps and args.gaps == "error":
         g = gaps[0]
         more = f" (and {len(gaps) - 1} more)" if len(gaps) > 1 else ""
@@ -91,6 +99,13 @@ def run_from_poses(args, read) -> int:
         f"median spacing {med * 1e3:.3f} ms")
     if gaps and args.gaps == "split":
         pieces = split_at_gaps(track, gaps)
+        short = [p for p in pieces if p.t_ns.size < MIN_PIECE_POSES]
+        pieces = [p for p in pieces if p.t_ns.size >= MIN_PIECE_POSES]
+        if short:
+            say(f"note: {len(short)} pieces with fewer than {MIN_PIECE_POSES} poses were skipped "
+                f"({sum(p.t_ns.size for p in short)} poses)")
+        if not pieces:
+            raise InputError(f"no piece between gaps has {MIN_PIECE_POSES} poses or more", path=args.poses)
         reports = []
         with OutputFolder(args.out, force=args.force) as tmp:
             for i, piece in enumerate(pieces):
@@ -115,7 +130,15 @@ def _one(args, track, out_dir, order, knot, gaps, max_gap, force=False, quiet=Fa
     n_poses = track.t_ns.size
     spl, rep = fit(t_s, track.positions, track.quat_xyzw, kind=args.spline, order=order, knot_spacing_s=knot,
                    smoothness=DEFAULT_SMOOTHNESS if args.smoothness is None else args.smoothness,
-                   origin_ns=origin, progress=n_poses > 100_000, return_report=True)
+                   origin_ns=origin, reject_outliers=not args.keep_outliers, progress=n_poses > 100_000,
+                   return_report=True)
+    if rep.dropped_poses:
+        lines = getattr(track, "line_numbers", None)
+        where = [int(lines[i]) for i in rep.dropped_poses] if lines is not None else rep.dropped_poses
+        rep.dropped_poses = [{"index": int(i), "line": int(w), "t_ns": int(track.t_ns[i])}
+                             for i, w in zip(rep.dropped_poses, where)]
+        say(f"outliers      {len(where)} poses dropped (lines {', '.join(map(str, where[:8]))}"
+            f"{', ...' if len(where) > 8 else ''}); --keep-outliers keeps them")
     if args.timestamps:
         from ..io.timestamps import read_timestamps
 

@@ -18,9 +18,11 @@ stamps of a file (--stamps; first column, ns or s, e.g. a camera's data.csv). IM
 window bounds that fall between samples are interpolated linearly; ground truth between its
 stamps is interpolated (slerp for the rotation).
 
-With noise densities (--imu, default OUT/imu.yaml when it exists; Kalibr keys, plain or under
-imu0 as in a Kalibr imu chain) the table also has each window's 9-dof NEES of the
-(p, theta, v) error and a summary against the chi-square interval.
+With noise densities (--imu: an IMU yaml with Kalibr keys, a Kalibr imu chain, or a preset name;
+default OUT/imu.yaml when it exists) the table also has each window's 9-dof NEES of the
+(p, theta, v) error and a summary against the chi-square interval. One-step windows get no
+NEES (their 9x9 covariance is singular); windows of a few samples are dominated by the
+midpoint rule's deterministic discretization error in p, which the covariance does not model.
 
 Example:
   splineimu preintegrate out --every 200
@@ -40,8 +42,8 @@ def add_arguments(parser) -> None:
     win.add_argument("--stamps", metavar="FILE", default=None,
                      help="window bounds: first column of FILE, ns (integers) or s (decimals)")
     parser.add_argument("--imu", metavar="IMU.yaml", default=None,
-                        help="Kalibr noise parameters for the covariance and NEES "
-                             "(default: OUT_FOLDER/imu.yaml if present)")
+                        help="noise parameters (yaml with Kalibr keys, or a preset name) for the "
+                             "covariance and NEES (default: OUT_FOLDER/imu.yaml if present)")
     parser.add_argument("--method", choices=("midpoint", "euler"), default="midpoint",
                         help="discretization (default: midpoint)")
     parser.add_argument("--covariance", choices=("consistent", "vins"), default="consistent",
@@ -76,8 +78,8 @@ def read_euroc_groundtruth(path):
     if df.shape[0] == 0:
         raise InputError("no data rows", path)
     if df.shape[1] < 17:
-        raise InputError(f"expected 17 columns (ns, p xyz, q wxyz, v xyz, b_w xyz, b_a xyz), got {df.shape[1]}",
-                         path)
+        raise InputError("expected 17 columns (ns, p xyz, q wxyz, v xyz, b_w xyz, b_a xyz), "
+                         f"got {df.shape[1]}", path)
     try:
         t_ns = np.array([int(s.strip()) for s in df.iloc[:, 0]], dtype=np.int64)
         v = df.iloc[:, 1:17].astype(np.float64).to_numpy()
@@ -92,46 +94,13 @@ def read_euroc_groundtruth(path):
             v[:, 10:13].copy(), v[:, 13:16].copy())
 
 
-def read_noise_yaml(path) -> dict:
-    """Kalibr noise keys from an imu.yaml (top level, or the first mapping that has them)."""
-    import yaml
+def read_noise_yaml(spec) -> dict:
+    """The four Kalibr densities ((3,) arrays) of an IMU yaml or preset, via the shared
+    :func:`splineimu.imu.config.load_imu_config` (Kalibr chains and OpenCV headers included)."""
+    from ..imu.config import load_imu_config
 
-    from ..errors import ConfigError, InputError
-
-    path = Path(path)
-    if not path.is_file():
-        raise ConfigError(f"noise file not found: {path}")
-    text = path.read_text(encoding="utf-8")
-    lines = text.splitlines()
-    if lines and lines[0].startswith("%YAML:"):  # OpenCV-style header of Kalibr chains
-        text = "\n".join(lines[1:])
-    try:
-        doc = yaml.safe_load(text)
-    except yaml.YAMLError as e:
-        raise InputError(f"not valid yaml: {e}", path) from None
-
-    def find(d):
-        if isinstance(d, dict):
-            if all(k in d for k in KALIBR_KEYS):
-                return d
-            for v in d.values():
-                r = find(v)
-                if r is not None:
-                    return r
-        return None
-
-    found = find(doc)
-    if found is None:
-        raise ConfigError(f"{path}: needs the Kalibr keys {', '.join(KALIBR_KEYS)}")
-    out = {}
-    for k in KALIBR_KEYS:
-        try:
-            out[k] = float(found[k])
-        except (TypeError, ValueError):
-            raise ConfigError(f"{path}: `{k}` must be a number, got {found[k]!r}") from None
-        if not out[k] >= 0:
-            raise ConfigError(f"{path}: `{k}` must be >= 0, got {found[k]!r}")
-    return out
+    cfg = load_imu_config(spec)
+    return {k: getattr(cfg, k).copy() for k in KALIBR_KEYS}
 
 
 def make_windows(imu_t_ns, gt_t_ns, every=None, stamps_ns=None):
@@ -178,7 +147,7 @@ def run(args) -> int:
     for p, what in ((imu_path, "IMU csv"), (gt_path, "ground truth")):
         if not p.is_file():
             raise ConfigError(f"{what} not found: {p}")
-    noise_path = Path(args.imu) if args.imu else (out / "imu.yaml" if (out / "imu.yaml").is_file() else None)
+    noise_path = args.imu if args.imu else (out / "imu.yaml" if (out / "imu.yaml").is_file() else None)
     noise = read_noise_yaml(noise_path) if noise_path is not None else None
 
     t_ns, gyro, accel = read_imu_csv(imu_path)
@@ -207,16 +176,21 @@ def run(args) -> int:
     limit = None if args.all else 40
     if limit is not None and len(lines) - 1 > limit:
         half = limit // 2
-        lines = lines[: 1 + half] + [f"... {len(lines) - 1 - limit} windows not shown (--all) ..."] + lines[-half:]
+        skipped = f"... {len(lines) - 1 - limit} windows not shown (--all) ..."
+        lines = lines[: 1 + half] + [skipped] + lines[-half:]
     print("\n".join(lines))
     print(f"max error: p {df['err_p_m'].max():.3e} m, v {df['err_v_m_s'].max():.3e} m/s, "
           f"theta {df['err_theta_deg'].max():.3e} deg")
     if noise is not None:
-        n = len(df)
-        lo, hi = stats.chi2.ppf([0.025, 0.975], 9 * n) / n
-        m = float(np.mean(res.nees))
-        verdict = "inside" if lo <= m <= hi else "OUTSIDE"
-        print(f"mean NEES {m:.3f} (9 dof; 95% interval for {n} windows [{lo:.3f}, {hi:.3f}]: {verdict})")
+        ok = np.isfinite(res.nees)
+        n = int(ok.sum())
+        if n < len(df):
+            print(f"{len(df) - n} windows without NEES (singular covariance: too few samples)")
+        if n:
+            lo, hi = stats.chi2.ppf([0.025, 0.975], 9 * n) / n
+            m = float(np.mean(res.nees[ok]))
+            verdict = "inside" if lo <= m <= hi else "OUTSIDE"
+            print(f"mean NEES {m:.3f} (9 dof; 95% interval for {n} windows [{lo:.3f}, {hi:.3f}]: {verdict})")
     if args.output:
         from ..io.output import atomic_write_text
 

@@ -31,8 +31,12 @@ from ..errors import SplineImuError
 from .basis import blending_matrix
 from .core import KINDS, Spline
 
-#: Relative weight of the default smoothness penalty (keeps gaps well-posed, negligible bias).
+#: Relative weight of the default smoothness penalty where data are dense (negligible bias).
 DEFAULT_SMOOTHNESS = 1e-10
+#: Relative penalty weight on control points with little data in their support (gaps, sparse
+#: stretches): there the curve is the smoothest bridge, instead of being steered by the noise of
+#: the few poses at the gap's borders.
+SPARSE_SMOOTHNESS = 1e-3
 
 
 @dataclass
@@ -56,6 +60,7 @@ class FitReport:
     smoothness: float
     dropped_poses: list = field(default_factory=list)
     knot_choice: dict | None = None
+    sparse_control_points: int = 0
     notes: list = field(default_factory=list)
 
     def to_dict(self) -> dict:
@@ -145,15 +150,25 @@ def _difference_matrix_band(n, order_diff):
 
 
 def _add_position_penalty(Hs, mu, r):
-    """Add mu * D_r^T D_r to scalar banded blocks Hs (n, k)."""
+    """Add D_r^T diag(mu) D_r to scalar banded blocks Hs (n, k); mu scalar or per row (n - r,)."""
     n, k = Hs.shape
     c = _difference_matrix_band(n, r)
     L = c.size
     if L > k or n < L:
         return
+    mu = np.broadcast_to(np.asarray(mu, dtype=np.float64), (n - L + 1,))
     for a in range(L):
         for b in range(a, L):
             Hs[a: n - L + 1 + a, b - a] += mu * c[a] * c[b]
+
+
+def _row_weights(sparse, width):
+    """Per penalty row touching controls j .. j + width - 1: True where any of them is sparse."""
+    n = sparse.size
+    if n < width:
+        return np.zeros(0, dtype=bool)
+    win = np.lib.stride_tricks.sliding_window_view(sparse, width)
+    return win.any(axis=1)
 
 
 def _rotation_penalty(D, tangent_dim, mu, H, g, jac_inv):
@@ -162,7 +177,8 @@ def _rotation_penalty(D, tangent_dim, mu, H, g, jac_inv):
     d_j moves by Jr^-1(d_j) delta_j - Jl^-1(d_j) delta_{j-1}; jac_inv(x, side) gives those blocks.
     """
     n = D.shape[0]
-    if n < 3 or mu <= 0:
+    mu = np.broadcast_to(np.asarray(mu, dtype=np.float64), (max(n - 2, 0),))
+    if n < 3 or not np.any(mu > 0):
         return 0.0
     d = D[1:]
     Jr_inv = jac_inv(d, "right")  # (n-1, dim, dim): block of delta_j for increment j (j = 1..n-1)
@@ -175,10 +191,10 @@ def _rotation_penalty(D, tangent_dim, mu, H, g, jac_inv):
     j = np.arange(1, n - 1)
     for a in range(3):
         for b in range(a, 3):
-            contrib = mu * np.einsum("nzi,nzj->nij", blocks[a], blocks[b])
+            contrib = mu[:, None, None] * np.einsum("nzi,nzj->nij", blocks[a], blocks[b])
             np.add.at(H, (j - 1 + a, b - a), contrib)
-        np.add.at(g, j - 1 + a, mu * np.einsum("nzi,nz->ni", blocks[a], e))
-    return float(mu * np.sum(e * e))
+        np.add.at(g, j - 1 + a, mu[:, None] * np.einsum("nzi,nz->ni", blocks[a], e))
+    return float(np.sum(mu[:, None] * e * e))
 
 
 def _so3_jac_inv(x, side):
@@ -221,6 +237,15 @@ class _Problem:
         self.w_pos = w_pos
         # penalty scale: data weight per control point
         self.data_per_ctrl = max(float(np.sum(w)) / self.n, 1e-12)
+        # a control point whose support contains a segment without any pose borders a gap
+        seg = np.clip(np.floor(self.s).astype(np.int64), 0, nseg - 1)
+        empty = (np.bincount(seg[w > 0], minlength=nseg) == 0).astype(np.float64)
+        self.sparse = np.convolve(empty, np.ones(order))[: self.n] > 0
+        self.n_sparse = int(self.sparse.sum())
+
+    def _mu(self, width):
+        rows = _row_weights(self.sparse, width)
+        return np.where(rows, SPARSE_SMOOTHNESS, self.smoothness) * self.data_per_ctrl
 
     # ------------------------------------------------------------------ position (split)
     def solve_positions(self):
@@ -229,8 +254,8 @@ class _Problem:
         rhs = np.zeros((n, 3))
         w = self.w * self.w_pos
         _kf.position_normal_equations(self.s, w, self.P, self.M, self.nseg, Hs, rhs)
-        mu = self.smoothness * self.data_per_ctrl * self.w_pos
-        _add_position_penalty(Hs, mu, min(3, k - 1))
+        r = min(3, k - 1)
+        _add_position_penalty(Hs, self._mu(r + 1) * self.w_pos, r)
         ab = np.zeros((k, n))
         for c in range(k):
             ab[k - 1 - c, c:] = Hs[: n - c, c]
@@ -250,8 +275,7 @@ class _Problem:
         res = np.empty((self.t.size, 3))
         w = self.w * self.w_rot
         cost = _kf.so3_normal_equations(self.s, w, self.R, Rc, D, self.Mc, self.nseg, H, g, res)
-        mu = self.smoothness * self.data_per_ctrl * self.w_rot
-        cost += _rotation_penalty(D, 3, mu, H, g, _so3_jac_inv)
+        cost += _rotation_penalty(D, 3, self._mu(3) * self.w_rot, H, g, _so3_jac_inv)
         return cost, H, g, res
 
     def solve_rotations(self, Rc, max_iter=30, tol=1e-12, progress=None):
@@ -266,9 +290,8 @@ class _Problem:
         res = np.empty((self.t.size, 6))
         w6 = np.ascontiguousarray(np.column_stack([self.w * self.w_pos] * 3 + [self.w * self.w_rot] * 3))
         cost = _kf.se3_normal_equations(self.s, w6, self.R, self.P, Rc, pc, D, self.Mc, self.nseg, H, g, res)
-        mu = self.smoothness * self.data_per_ctrl
         # scale the penalty per component like the data weights
-        cost += _rotation_penalty(D, 6, mu * np.sqrt(self.w_pos * self.w_rot), H, g, _se3_jac_inv)
+        cost += _rotation_penalty(D, 6, self._mu(3) * np.sqrt(self.w_pos * self.w_rot), H, g, _se3_jac_inv)
         return cost, H, g, res
 
     def _gauss_newton(self, Rc, pc, max_iter, tol, progress):
@@ -307,7 +330,8 @@ class _Problem:
 
 
 def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="auto", *, weights=None,
-        smoothness=DEFAULT_SMOOTHNESS, origin_ns=0, max_iter=30, progress=False, return_report=False):
+        smoothness=DEFAULT_SMOOTHNESS, origin_ns=0, max_iter=30, reject_outliers=True, progress=False,
+        return_report=False):
     """Least-squares B-spline through timestamped poses ``world_T_body``.
 
     Parameters
@@ -329,6 +353,9 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
         Relative weight of the P-spline difference penalty (see module notes).
     origin_ns : int
         Integer-nanosecond origin of the time base.
+    reject_outliers : bool
+        After the first fit, drop poses whose residual exceeds 8 robust standard deviations
+        (and 1e-5 m / 1e-5 rad) and fit again; the report lists them (``dropped_poses``).
     progress : bool
         Show a progress bar for long fits.
     return_report : bool
@@ -405,7 +432,53 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
             bar.update(1)
 
     tc = _control_times(t0, dt, n, order)
-    Rc = _interp_rotations(t, R, tc)
+    Rc0 = _interp_rotations(t, R, tc)
+    dropped = []
+    for attempt in range(2):
+        Rc, Pc, res_pos, res_rot, iters, conv = _solve(prob, Rc0, kind, max_iter, tick, smoothness, dt)
+        if not reject_outliers or attempt == 1:
+            break
+        bad = _outliers(res_pos, res_rot, prob.w)
+        if not bad.any():
+            break
+        dropped = np.flatnonzero(bad).tolist()
+        w2 = prob.w.copy()
+        w2[bad] = 0.0
+        prob = _Problem(t, P, R, w2, order, t0, dt, nseg, float(smoothness), prob.w_rot, prob.w_pos)
+    spl = Spline(t0, dt, Pc, Rc, kind, order, origin_ns)
+    if bar is not None:
+        bar.close()
+    keep = np.ones(t.size, dtype=bool)
+    keep[dropped] = False
+    ep = np.linalg.norm(res_pos[keep], axis=1)
+    ea = np.linalg.norm(res_rot[keep], axis=1)
+    report = FitReport(
+        kind=kind, order=order, knot_spacing_s=dt, knot_spacing_source=source, n_poses=int(t.size),
+        n_control=n, span_s=(float(t[0]), float(t[-1])),
+        residual_position_rms_m=float(np.sqrt(np.mean(ep**2))), residual_position_max_m=float(ep.max()),
+        residual_angle_rms_rad=float(np.sqrt(np.mean(ea**2))), residual_angle_max_rad=float(ea.max()),
+        iterations=iters, converged=bool(conv), time_s=time.perf_counter() - t0_wall,
+        smoothness=float(smoothness), dropped_poses=dropped, knot_choice=knot_choice,
+        sparse_control_points=prob.n_sparse,
+    )
+    spl.fit_report = report
+    return (spl, report) if return_report else spl
+
+
+def _outliers(res_pos, res_rot, w):
+    """Poses whose position or angle residual is beyond 8 robust sigmas (3-D norm)."""
+    bad = np.zeros(res_pos.shape[0], dtype=bool)
+    for res, floor in ((res_pos, 1e-5), (res_rot, 1e-5)):
+        e = np.linalg.norm(res, axis=1)
+        used = e[w > 0]
+        if used.size < 10:
+            continue
+        sigma = np.median(used) / 1.538  # median of a 3-D Gaussian norm is 1.538 sigma
+        bad |= (e > 8.0 * sigma) & (e > floor)
+    return bad & (w > 0)
+
+
+def _solve(prob, Rc, kind, max_iter, tick, smoothness, dt):
     try:
         Pc = prob.solve_positions()
         Rc, res_rot, iters, conv = prob.solve_rotations(Rc, max_iter=max_iter, progress=tick)
@@ -413,27 +486,12 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
         if kind == "se3":
             Rc, Pc, res6, it2, conv = prob._gauss_newton(Rc, Pc, max_iter, 1e-12, tick)
             iters += it2
+            spl = Spline(prob.t0, prob.dt, Pc, Rc, kind, prob.order)
+            p_fit, q_fit = spl.pose(prob.t)
+            res_pos = prob.P - p_fit
+            res_rot = lie.so3_log(np.matmul(np.swapaxes(lie.quat_xyzw_to_matrix(q_fit), 1, 2), prob.R))
     except np.linalg.LinAlgError:
         raise SplineImuError(
             f"the fit is singular at knot spacing {dt:g} s with smoothness {smoothness:g}: use a larger "
             "knot spacing or a positive smoothness") from None
-        spl = Spline(t0, dt, Pc, Rc, kind, order, origin_ns)
-        p_fit, q_fit = spl.pose(t)
-        res_pos = P - p_fit
-        res_rot = lie.so3_log(np.matmul(np.swapaxes(lie.quat_xyzw_to_matrix(q_fit), 1, 2), R))
-    else:
-        spl = Spline(t0, dt, Pc, Rc, kind, order, origin_ns)
-    if bar is not None:
-        bar.close()
-    ep = np.linalg.norm(res_pos, axis=1)
-    ea = np.linalg.norm(res_rot, axis=1)
-    report = FitReport(
-        kind=kind, order=order, knot_spacing_s=dt, knot_spacing_source=source, n_poses=int(t.size),
-        n_control=n, span_s=(float(t[0]), float(t[-1])),
-        residual_position_rms_m=float(np.sqrt(np.mean(ep**2))), residual_position_max_m=float(ep.max()),
-        residual_angle_rms_rad=float(np.sqrt(np.mean(ea**2))), residual_angle_max_rad=float(ea.max()),
-        iterations=iters, converged=bool(conv), time_s=time.perf_counter() - t0_wall,
-        smoothness=float(smoothness), knot_choice=knot_choice,
-    )
-    spl.fit_report = report
-    return (spl, report) if return_report else spl
+    return Rc, Pc, res_pos, res_rot, iters, conv

@@ -1,0 +1,230 @@
+"""End-to-end: scene / from-tum / from-euroc through the command line."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from conftest import require_shared
+
+from splineimu.cli import main
+from splineimu.scenes import make_scene
+
+
+def run_cli(*argv):
+    return main([str(a) for a in argv])
+
+
+def read_imu(path):
+    from splineimu.io.imu_csv import read_imu_csv
+
+    return read_imu_csv(path)
+
+
+@pytest.fixture(scope="module")
+def ellipse_tum(tmp_path_factory):
+    d = tmp_path_factory.mktemp("ell")
+    path = d / "ellipse.tum"
+    assert run_cli("scene", "ellipse", "--duration", 12, "--rate", 100, "--t0-ns", 1_403_636_579_758_555_392,
+                   "--tum", path) == 0
+    return path
+
+
+def test_scene_writes_the_output_layout(tmp_path, capsys):
+    out = tmp_path / "out"
+    assert run_cli("scene", "ellipse", "-o", out, "--duration", 5, "--rate", 200) == 0
+    for f in ("imu0/data.csv", "state_groundtruth_estimate0/data.csv", "groundtruth.tum", "imu.yaml",
+              "report.json"):
+        assert (out / f).is_file(), f
+    t_ns, gyro, acc = read_imu(out / "imu0" / "data.csv")
+    assert t_ns.size == 1001 and t_ns[1] - t_ns[0] == 5_000_000
+    g0, f0 = make_scene("ellipse", duration_s=5).imu(t_ns / 1e9)
+    np.testing.assert_allclose(gyro, g0, atol=1e-15)
+    np.testing.assert_allclose(acc, f0, atol=1e-13)
+    rep = json.loads((out / "report.json").read_text())
+    assert rep["imu"]["noise"] == "noise-free" and rep["source"]["name"] == "ellipse"
+    assert "written" in capsys.readouterr().out
+
+
+def test_static_scene_reads_plus_g(tmp_path):
+    out = tmp_path / "s"
+    assert run_cli("scene", "static", "-o", out, "--duration", 1) == 0
+    _, gyro, acc = read_imu(out / "imu0" / "data.csv")
+    assert np.all(gyro == 0) and np.allclose(acc, [0, 0, 9.81], atol=1e-15)
+
+
+def test_from_tum_reproduces_the_scene(ellipse_tum, tmp_path, capsys):
+    out = tmp_path / "out"
+    assert run_cli("from-tum", ellipse_tum, "-o", out, "--rate", 200) == 0
+    t_ns, gyro, acc = read_imu(out / "imu0" / "data.csv")
+    origin = 1_403_636_579_758_555_392
+    assert t_ns[0] == origin and (t_ns[-1] - origin) == 12_000_000_000
+    g0, f0 = make_scene("ellipse", duration_s=12).imu((t_ns - origin) / 1e9)
+    inner = slice(100, -100)
+    assert np.sqrt(np.mean((gyro - g0)[inner] ** 2)) < 1e-4
+    assert np.sqrt(np.mean((acc - f0)[inner] ** 2)) < 1e-2
+    printed = capsys.readouterr().out
+    assert "knot spacing" in printed and "fit residual" in printed
+    rep = json.loads((out / "report.json").read_text())
+    assert rep["spline"]["knot_spacing_source"] == "auto" and rep["spline"]["n_poses"] == 1201
+
+
+def test_same_seed_same_bytes_and_noise_model_file(ellipse_tum, tmp_path):
+    outs = []
+    for i, seed in enumerate((7, 7, 8)):
+        out = tmp_path / f"o{i}"
+        assert run_cli("from-tum", ellipse_tum, "-o", out, "--imu", "adis16448", "--seed", seed,
+                       "--knot-spacing", 0.05, "--order", 4) == 0
+        outs.append((out / "imu0" / "data.csv").read_bytes())
+    assert outs[0] == outs[1] and outs[0] != outs[2]
+    assert "gyroscope_noise_density" in (tmp_path / "o0" / "imu.yaml").read_text()
+
+
+def test_existing_output_is_not_overwritten_without_force(ellipse_tum, tmp_path, capsys):
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "keep.txt").write_text("mine")
+    assert run_cli("from-tum", ellipse_tum, "-o", out) == 1
+    assert "--force" in capsys.readouterr().err
+    assert (out / "keep.txt").read_text() == "mine"
+    assert run_cli("from-tum", ellipse_tum, "-o", out, "--force", "--knot-spacing", 0.1) == 0
+    assert not (out / "keep.txt").exists() and (out / "imu0" / "data.csv").exists()
+
+
+BAD_FILES = {
+    "nan": ("0.0 0 0 0 0 0 0 1\n0.1 nan 0 0 0 0 0 1\n0.2 0 0 0 0 0 0 1\n", 2),
+    "unsorted": ("0.0 0 0 0 0 0 0 1\n0.2 0 0 0 0 0 0 1\n0.1 0 0 0 0 0 0 1\n", 3),
+    "zero_quat": ("0.0 0 0 0 0 0 0 1\n0.1 0 0 0 0 0 0 0\n0.2 0 0 0 0 0 0 1\n", 2),
+    "malformed": ("0.0 0 0 0 0 0 0 1\n0.1 0 0 0 abc 0 0 1\n0.2 0 0 0 0 0 0 1\n", 2),
+    "short_line": ("0.0 0 0 0 0 0 0 1\n0.1 0 0 0 0 0 1\n0.2 0 0 0 0 0 0 1\n", 2),
+    "repeated_stamp": ("0.0 0 0 0 0 0 0 1\n0.1 0 0 0 0 0 0 1\n0.1 1 0 0 0 0 0 1\n", 3),
+    "too_few": ("0.0 0 0 0 0 0 0 1\n", None),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD_FILES))
+def test_bad_input_fails_cleanly(case, tmp_path):
+    text, line = BAD_FILES[case]
+    src = tmp_path / f"{case}.txt"
+    src.write_text(text)
+    out = tmp_path / "out"
+    proc = subprocess.run([sys.executable, "-m", "splineimu", "from-tum", str(src), "-o", str(out)],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 1, proc.stderr
+    err = proc.stderr.strip()
+    assert "Traceback" not in err and len(err.splitlines()) == 1, err
+    assert f"{case}.txt" in err
+    if line is not None:
+        assert f":{line}:" in err, err
+    assert not out.exists()
+    assert [p.name for p in tmp_path.iterdir()] == [src.name]  # no temp folders left
+
+
+def _gappy_tum(path):
+    t = np.concatenate([np.arange(0, 5, 0.01), np.arange(6.2, 10, 0.01)])
+    k = make_scene("ellipse", duration_s=10).kinematics(t)
+    with open(path, "w") as fh:
+        for ti, p, q in zip(t, k.position_world, k.quat_xyzw):
+            fh.write(f"{ti:.6f} {p[0]:.9f} {p[1]:.9f} {p[2]:.9f} {q[0]:.12f} {q[1]:.12f} {q[2]:.12f} {q[3]:.12f}\n")
+    return path
+
+
+def test_gaps_error_bridge_split(tmp_path, capsys):
+    src = _gappy_tum(tmp_path / "gappy.tum")
+    assert run_cli("from-tum", src, "-o", tmp_path / "a") == 1
+    err = capsys.readouterr().err
+    assert "gappy.tum:501:" in err and "--gaps bridge" in err and "1.2" in err
+    assert run_cli("from-tum", src, "-o", tmp_path / "b", "--gaps", "bridge") == 0
+    rep = json.loads((tmp_path / "b" / "report.json").read_text())
+    assert len(rep["gaps"]["bridged"]) == 1 and abs(rep["gaps"]["bridged"][0]["duration_s"] - 1.21) < 1e-9
+    assert run_cli("from-tum", src, "-o", tmp_path / "c", "--gaps", "split") == 0
+    parts = sorted(p.name for p in (tmp_path / "c").iterdir())
+    assert parts == ["part_000", "part_001"]
+    t0, _, _ = read_imu(tmp_path / "c" / "part_001" / "imu0" / "data.csv")
+    assert t0[0] == 6_200_000_000
+
+
+def test_timestamps_file_and_extrinsic(ellipse_tum, tmp_path):
+    origin = 1_403_636_579_758_555_392
+    stamps = origin + np.array([-5, 0, 1_234_567, 5_000_000_001, 12_000_000_000, 12_000_000_001])
+    ts = tmp_path / "stamps.csv"
+    ts.write_text("#timestamp [ns]\n" + "\n".join(str(s) for s in stamps) + "\n")
+    ext = tmp_path / "ext.yaml"
+    ext.write_text("translation: [0.1, -0.05, 0.02]\nquat_xyzw: [0, 0, 0.7071067811865476, 0.7071067811865476]\n")
+    out = tmp_path / "out"
+    assert run_cli("from-tum", ellipse_tum, "-o", out, "--timestamps", ts, "--extrinsic", ext) == 0
+    t_ns, gyro, _ = read_imu(out / "imu0" / "data.csv")
+    np.testing.assert_array_equal(t_ns, stamps[1:5])
+    # the sensor is yawed by +90 deg: w_s = R_bs^T w_b
+    g0 = make_scene("ellipse", duration_s=12).imu((t_ns - origin) / 1e9)[0]
+    np.testing.assert_allclose(gyro[:, 0], g0[:, 1], atol=1e-4)
+    np.testing.assert_allclose(gyro[:, 1], -g0[:, 0], atol=1e-4)
+
+
+# ------------------------------------------------------------------------ real data
+def test_real_euroc_gyro_matches_at_least_as_well_as_finite_differences(tmp_path):
+    """EuRoC V1_02: synthesize at the real IMU's stamps; compare with the real gyro minus the
+    ground truth's bias, both low-passed at 10 Hz, against central differences of the poses."""
+    from scipy.signal import butter, sosfiltfilt
+
+    from splineimu import lie
+    from splineimu.io.euroc import read_euroc_groundtruth
+
+    gt = require_shared("euroc_V1_02_medium", "groundtruth.csv")
+    imu = require_shared("euroc_V1_02_medium", "imu0_first40s.csv")
+    out = tmp_path / "out"
+    assert run_cli("from-euroc", gt, "-o", out, "--timestamps", imu) == 0
+    t_ns, gyro, _ = read_imu(out / "imu0" / "data.csv")
+    rt, rg, _ = read_imu(imu)
+    sel = np.isin(rt, t_ns)
+    real_t, real_g = rt[sel], rg[sel]
+    np.testing.assert_array_equal(real_t, t_ns)
+    track = read_euroc_groundtruth(gt)
+    tg = (track.t_ns - t_ns[0]) / 1e9
+    ti = (t_ns - t_ns[0]) / 1e9
+    bias = np.column_stack([np.interp(ti, tg, track.bias_gyro[:, i]) for i in range(3)])
+    # central differences of the ground truth, interpolated to the IMU stamps
+    R = lie.quat_xyzw_to_matrix(track.quat_xyzw)
+    w_fd = lie.so3_log(np.swapaxes(R[:-2], 1, 2) @ R[2:]) / (tg[2:] - tg[:-2])[:, None]
+    fd = np.column_stack([np.interp(ti, tg[1:-1], w_fd[:, i]) for i in range(3)])
+    sos = butter(4, 10.0, fs=200.0, output="sos")
+    lp = lambda x: sosfiltfilt(sos, x, axis=0)  # noqa: E731
+    ref = lp(real_g - bias)
+    inner = slice(400, -400)
+    err_ours = np.sqrt(np.mean((lp(gyro) - ref)[inner] ** 2))
+    err_fd = np.sqrt(np.mean((lp(fd) - ref)[inner] ** 2))
+    assert err_ours <= err_fd, (err_ours, err_fd)
+
+
+def test_real_tum_rgbd_with_repeated_stamp_and_gaps(tmp_path, capsys):
+    src = require_shared("tum_rgbd", "fr2_desk_groundtruth.txt")
+    assert run_cli("from-tum", src, "-o", tmp_path / "a") == 1
+    assert "fr2_desk_groundtruth.txt:10863: timestamp" in capsys.readouterr().err  # repeated, other pose
+    assert run_cli("from-tum", src, "-o", tmp_path / "a", "--repeated-stamps", "first") == 1
+    assert "--gaps" in capsys.readouterr().err
+    assert run_cli("from-tum", src, "-o", tmp_path / "b", "--gaps", "split", "--rate", 100,
+                   "--repeated-stamps", "first") == 0
+    assert len(list((tmp_path / "b").iterdir())) >= 2
+
+
+def test_real_tum_vi_gaps_up_to_one_second(tmp_path):
+    src = require_shared("tum_vi", "room1_512_16_groundtruth.tum")
+    assert run_cli("from-tum", src, "-o", tmp_path / "a") == 1
+    assert run_cli("from-tum", src, "-o", tmp_path / "b", "--max-gap", 1.1, "--rate", 100) == 0
+    _, gyro, acc = read_imu(tmp_path / "b" / "imu0" / "data.csv")
+    assert np.all(np.isfinite(gyro)) and np.abs(gyro).max() < 20 and np.abs(acc).max() < 100
+
+
+def test_real_openvins_14_columns_and_utm_coordinates(tmp_path, capsys):
+    src = require_shared("openvins_sim", "udel_gore.txt")
+    assert run_cli("from-tum", src, "-o", tmp_path / "a", "--gaps", "bridge") == 0
+    assert "ignored" in capsys.readouterr().err
+    geo = require_shared("misc", "georeferenced.tum")
+    assert run_cli("from-tum", geo, "-o", tmp_path / "b", "--gaps", "bridge", "--rate", 50) == 0
+    rep = json.loads((tmp_path / "b" / "report.json").read_text())
+    assert rep["spline"]["residual_position_rms_m"] < 1.0
+    _, gyro, acc = read_imu(tmp_path / "b" / "imu0" / "data.csv")
+    assert np.all(np.isfinite(acc)) and np.abs(acc).max() < 50
