@@ -1,0 +1,39 @@
+"""``splineimu run``: a scene file names the motion, the IMU, the outputs and the seed."""
+
+from __future__ import annotations
+
+NAME = "run"
+ORDER = 15
+HELP = "run a scene file (YAML: motion source, spline, IMU rate and sensor model, outputs, seed)"
+DESCRIPTION = """\
+Run a scene file. See splineimu/scenefile.py (or examples/*.yaml) for the format:
+
+  motion: {scene: ellipse, duration_s: 60}     or   motion: {poses: mocap.tum, spline: {order: 6}}
+  imu:    {rate_hz: 200, model: adis16448}
+  seed:   42
+  output: {dir: out, plot: true}
+
+examples:
+  splineimu run examples/ellipse_scene.yaml
+  splineimu run examples/ellipse_scene.yaml --print    show the equivalent command line
+"""
+
+
+def add_arguments(p):
+    p.add_argument("scene_file", metavar="SCENE.yaml")
+    p.add_argument("--print", action="store_true", help="print the equivalent command line and exit")
+    p.add_argument("--force", action="store_true", help="replace an existing output folder")
+
+
+def run(args) -> int:
+    import shlex
+    import tempfile
+    from pathlib import Path
+
+    from ..scenefile import run_scene_file, scene_to_argv
+
+    if args.print:
+        with tempfile.TemporaryDirectory() as tmp:
+            print("splineimu " + " ".join(shlex.quote(a) for a in scene_to_argv(args.scene_file, Path(tmp))))
+        return 0
+    return run_scene_file(args.scene_file, ["--force"] if args.force else [])
