@@ -63,6 +63,9 @@ class Synthesis:
     applied: list = field(default_factory=list)
     gravity: tuple = DEFAULT_GRAVITY
     extrinsic: Extrinsic | None = None
+    sampling: str = "point"
+    delta_angle: np.ndarray | None = None
+    delta_velocity: np.ndarray | None = None
 
     def to_dataframe(self):
         import pandas as pd
@@ -74,8 +77,50 @@ class Synthesis:
         return pd.DataFrame(cols)
 
 
+#: Gauss-Legendre nodes per sample interval for ``sampling="mean"``
+MEAN_NODES = 8
+
+
+def _interval_starts(source, t_s):
+    """Start of each sample's interval (t_{k-1}; the first uses the next spacing), clamped to the source."""
+    t_s = np.asarray(t_s, dtype=np.float64)
+    start = np.empty_like(t_s)
+    start[1:] = t_s[:-1]
+    start[0] = t_s[0] - (t_s[1] - t_s[0] if t_s.size > 1 else 0.0)
+    return np.maximum(start, source.t_min_s)
+
+
+def mean_ideal(source, t_s, gravity, extrinsic):
+    """Ideal gyro and specific force averaged over each interval ``[t_{k-1}, t_k]`` (Gauss-Legendre)."""
+    a = _interval_starts(source, t_s)
+    x, w = np.polynomial.legendre.leggauss(MEAN_NODES)
+    h = 0.5 * (t_s - a)
+    nodes = (0.5 * (t_s + a))[:, None] + h[:, None] * x[None, :]
+    sub = ideal_imu(source, nodes.ravel(), gravity=gravity, extrinsic=extrinsic)
+    n = t_s.size
+    gyro = 0.5 * np.einsum("nkd,k->nd", sub.gyro.reshape(n, MEAN_NODES, 3), w)
+    acc = 0.5 * np.einsum("nkd,k->nd", sub.specific_force.reshape(n, MEAN_NODES, 3), w)
+    return gyro, acc
+
+
+def increments(source, t_s, gravity, extrinsic, ideal_at_stamps):
+    """Exact delta-angle ``Log(R_s(t_{k-1})^T R_s(t_k))`` and delta-velocity
+    ``R_s(t_{k-1})^T (v_s(t_k) - v_s(t_{k-1}) - g dt)`` of the sensor over each interval."""
+    from .lie import quat_xyzw_to_matrix, so3_log
+
+    a = _interval_starts(source, t_s)
+    prev = ideal_imu(source, a, gravity=gravity, extrinsic=extrinsic)
+    R0 = quat_xyzw_to_matrix(prev.quat_xyzw)
+    R1 = quat_xyzw_to_matrix(ideal_at_stamps.quat_xyzw)
+    dtheta = so3_log(np.matmul(np.swapaxes(R0, 1, 2), R1))
+    g = np.asarray(gravity, dtype=np.float64)
+    dv_w = ideal_at_stamps.velocity_world - prev.velocity_world - g * (t_s - a)[:, None]
+    return dtheta, np.einsum("nji,nj->ni", R0, dv_w), t_s - a
+
+
 def synthesize(source: MotionSource, t_ns, *, gravity=DEFAULT_GRAVITY, extrinsic: Extrinsic | None = None,
-               imu_config=None, seed=None, temperature_c=None) -> Synthesis:
+               imu_config=None, seed=None, temperature_c=None, sampling="point",
+               with_increments=False) -> Synthesis:
     """IMU samples of ``source`` at integer-nanosecond stamps ``t_ns``.
 
     Parameters
@@ -90,21 +135,42 @@ def synthesize(source: MotionSource, t_ns, *, gravity=DEFAULT_GRAVITY, extrinsic
         Sensor model; None gives noise-free data.
     seed : int, optional
         Seed of the sensor model's random streams.
+    sampling : {"point", "mean"}
+        ``"point"``: the instantaneous value at each stamp. ``"mean"``: the average over the
+        interval ending at the stamp, ``[t_{k-1}, t_k]``, as an IMU's anti-alias filter /
+        integrating front end gives (8-point Gauss-Legendre per interval).
+    with_increments : bool
+        Also compute delta-angle and delta-velocity per interval (exact, coning and sculling
+        included), plus the sensor errors integrated over the interval.
     """
+    if sampling not in ("point", "mean"):
+        raise SplineImuError(f"sampling must be 'point' or 'mean', got {sampling!r}")
     t_ns = np.asarray(t_ns, dtype=np.int64)
     t_s = source.t_s_from_ns(t_ns)
     ideal = ideal_imu(source, t_s, gravity=gravity, extrinsic=extrinsic)
+    if sampling == "mean":
+        gyro0, acc0 = mean_ideal(source, t_s, gravity, extrinsic)
+    else:
+        gyro0, acc0 = ideal.gyro, ideal.specific_force
     zeros = np.zeros_like(ideal.gyro)
     if imu_config is None:
-        return Synthesis(t_ns, ideal.gyro.copy(), ideal.specific_force.copy(), zeros, zeros.copy(), ideal,
-                         None, seed, [], tuple(gravity), extrinsic)
-    from .imu.config import load_imu_config
-    from .imu.noise import SensorModel
+        syn = Synthesis(t_ns, gyro0.copy(), acc0.copy(), zeros, zeros.copy(), ideal,
+                        None, seed, [], tuple(gravity), extrinsic)
+    else:
+        from .imu.config import load_imu_config
+        from .imu.noise import SensorModel
 
-    cfg = load_imu_config(imu_config)
-    meas = SensorModel(cfg).apply(t_s, ideal.gyro, ideal.specific_force, rng=seed, temperature_c=temperature_c)
-    return Synthesis(t_ns, meas.gyro, meas.accel, meas.bias_gyro, meas.bias_accel, ideal, cfg, seed,
-                     list(getattr(meas, "applied", [])), tuple(gravity), extrinsic)
+        cfg = load_imu_config(imu_config)
+        meas = SensorModel(cfg).apply(t_s, gyro0, acc0, rng=seed, temperature_c=temperature_c)
+        syn = Synthesis(t_ns, meas.gyro, meas.accel, meas.bias_gyro, meas.bias_accel, ideal, cfg, seed,
+                        list(getattr(meas, "applied", [])), tuple(gravity), extrinsic)
+    syn.sampling = sampling
+    if with_increments:
+        dth, dv, dt = increments(source, t_s, gravity, extrinsic, ideal)
+        # sensor errors (bias, noise, scale, ...) integrated over the interval: (measured - true) dt
+        syn.delta_angle = dth + (syn.gyro_rad_s - gyro0) * dt[:, None]
+        syn.delta_velocity = dv + (syn.accel_m_s2 - acc0) * dt[:, None]
+    return syn
 
 
 def _versions():
@@ -138,13 +204,24 @@ def write_output(syn: Synthesis, out_dir, *, force=False, report: dict | None = 
         "seed": syn.seed,
         "gravity_m_s2": list(map(float, syn.gravity)),
         "extrinsic_body_T_sensor": None if syn.extrinsic is None else syn.extrinsic.matrix.tolist(),
-        "stamp_convention": "instantaneous value at the stamp",
+        "sampling": syn.sampling,
+        "stamp_convention": ("instantaneous value at the stamp" if syn.sampling == "point" else
+                             "mean over the interval [previous stamp, stamp] (stamp at the interval's end)"),
     }
     with OutputFolder(out_dir, force=force) as tmp:
         (tmp / "imu0").mkdir()
         (tmp / "state_groundtruth_estimate0").mkdir()
         # (+ 0.0 turns -0.0 into 0.0 in the text)
         write_euroc_imu(tmp / "imu0" / "data.csv", syn.t_ns, syn.gyro_rad_s + 0.0, syn.accel_m_s2 + 0.0)
+        if syn.delta_angle is not None:
+            from .io.output import atomic_write_bytes, format_table
+
+            head = ("#timestamp [ns] (end of interval),dtheta_x [rad],dtheta_y [rad],dtheta_z [rad],"
+                    "dv_x [m s^-1],dv_y [m s^-1],dv_z [m s^-1]\n")
+            body = format_table(syn.t_ns, np.hstack([syn.delta_angle, syn.delta_velocity]) + 0.0)
+            atomic_write_bytes(tmp / "imu0" / "increments.csv", head.encode() + body)
+            out_report["imu"]["increments"] = "imu0/increments.csv (exact delta-angle / delta-velocity " \
+                "over [previous stamp, stamp], sensor frame at the interval start)"
         write_euroc_groundtruth(tmp / "state_groundtruth_estimate0" / "data.csv", syn.t_ns,
                                 syn.ideal.position_world, syn.ideal.quat_xyzw, syn.ideal.velocity_world,
                                 syn.bias_gyro_rad_s, syn.bias_accel_m_s2)

@@ -29,6 +29,11 @@ def add_imu_args(p: argparse.ArgumentParser, rate_default=200.0):
                         "(e.g. adis16448); without it the output is noise-free")
     g.add_argument("--seed", type=int, default=None, help="seed of the sensor model's random streams")
     g.add_argument("--extrinsic", metavar="FILE", help="YAML with body_T_sensor (T_BS 4x4, or translation + quat_xyzw)")
+    g.add_argument("--sampling", choices=["point", "mean"], default="point",
+                   help="point: value at the stamp (default); mean: average over [previous stamp, stamp], "
+                        "as an IMU's anti-alias / integrating front end gives")
+    g.add_argument("--increments", action="store_true",
+                   help="also write imu0/increments.csv: delta-angle and delta-velocity per interval")
     g.add_argument("--gravity", type=float, nargs=3, default=(0.0, 0.0, -9.81), metavar=("GX", "GY", "GZ"),
                    help="world gravity vector [m/s^2] (default 0 0 -9.81)")
 

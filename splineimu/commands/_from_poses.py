@@ -155,7 +155,8 @@ def _one(args, track, out_dir, order, knot, gaps, max_gap, force=False, quiet=Fa
         t_ns = uniform_stamps_ns(int(track.t_ns[0]), int(track.t_ns[-1]), args.rate)
     seed = seed_or_default(args.seed) if args.imu else args.seed
     syn = synthesize(spl, t_ns, gravity=tuple(args.gravity), extrinsic=load_extrinsic(args.extrinsic),
-                     imu_config=args.imu, seed=seed)
+                     imu_config=args.imu, seed=seed,
+                     sampling=args.sampling, with_increments=args.increments)
     report = {
         "source": {"kind": "pose file", "path": str(args.poses), "poses": int(n_poses),
                    "first_ns": int(track.t_ns[0]), "last_ns": int(track.t_ns[-1]), "notices": list(track.notices)},

@@ -31,18 +31,21 @@ _LABELS = ["gyro x", "gyro y", "gyro z", "accel x", "accel y", "accel z"]
 
 def add_arguments(parser) -> None:
     parser.add_argument("input", metavar="IMU_FILE", help="EuRoC imu csv, or .rda matrix (see --format)")
-    parser.add_argument("-o", "--output", metavar="DIR", help="write DIR/allan.yaml (and DIR/allan.png with --plot)")
+    parser.add_argument("-o", "--output", metavar="DIR",
+                        help="write DIR/allan.yaml (and DIR/allan.png with --plot)")
     parser.add_argument("--plot", action="store_true", help="also write DIR/allan.png (needs -o)")
     parser.add_argument("--rate", type=float, metavar="HZ",
                         help="sample rate (default: from the csv stamps' median interval; 100 for .rda)")
-    parser.add_argument("--format", choices=("euroc", "rda"), help="input format (default: from the extension)")
+    parser.add_argument("--format", choices=("euroc", "rda"),
+                        help="input format (default: from the extension)")
     parser.add_argument("--gyro-unit", choices=("rad/s", "deg/s", "deg/h"),
                         help="unit of the gyro columns (default rad/s for csv, deg/s for rda)")
     parser.add_argument("--accel-unit", choices=("m/s^2", "g", "mg"),
                         help="unit of the accelerometer columns (default m/s^2 for csv, g for rda)")
     parser.add_argument("--points-per-decade", type=float, default=10.0, metavar="P",
                         help="density of the log-spaced cluster times (default 10)")
-    parser.add_argument("--force", action="store_true", help="overwrite an existing DIR/allan.yaml / allan.png")
+    parser.add_argument("--force", action="store_true",
+                        help="overwrite an existing DIR/allan.yaml / allan.png")
 
 
 def load_recording(path, fmt=None, rate_hz=None, gyro_unit=None, accel_unit=None):
@@ -108,17 +111,19 @@ def format_table(result, fit, source="") -> str:
         bm = "" if fit.bias_instability_resolved[k] else "~"
         any_k |= bool(km)
         any_b |= bool(bm)
-        lines.append(f"{result.labels[k]:8s}  {_fmt_ci(fit.white_noise_density[k], fit.white_noise_density_ci95[k]):{w}s}"
-                     f"  {_fmt_ci(fit.random_walk[k], fit.random_walk_ci95[k], km):{w}s}"
-                     f"  {_fmt_ci(fit.bias_instability[k], fit.bias_instability_ci95[k], bm):{w}s}"
+        n_txt = _fmt_ci(fit.white_noise_density[k], fit.white_noise_density_ci95[k])
+        k_txt = _fmt_ci(fit.random_walk[k], fit.random_walk_ci95[k], km)
+        b_txt = _fmt_ci(fit.bias_instability[k], fit.bias_instability_ci95[k], bm)
+        lines.append(f"{result.labels[k]:8s}  {n_txt:{w}s}  {k_txt:{w}s}  {b_txt:{w}s}"
                      f"  {fit.bias_instability_tau_s[k]:.4g}")
     if result.adev.shape[1] == 6:
         lines.append("units: gyro N rad/s/sqrt(Hz), K rad/s^2/sqrt(Hz), B rad/s; "
                      "accel N m/s^2/sqrt(Hz), K m/s^3/sqrt(Hz), B m/s^2")
     if any_k:
-        lines.append("* random walk not resolved (the +1/2 slope never dominates): value is a 95% upper bound")
+        lines.append("* random walk not resolved (not significant at 95%): the value is its 95% upper bound")
     if any_b:
-        lines.append("~ no flat region (the minimum is the white / random-walk crossover): B is an upper bound")
+        lines.append("~ no flat region (the minimum is the white / random-walk crossover): "
+                     "B is an upper bound")
     return "\n".join(lines)
 
 
@@ -141,7 +146,8 @@ def run(args) -> int:
         if existing and not args.force:
             raise OutputExistsError(f"{', '.join(existing)} exist(s); use --force to overwrite")
 
-    gyro, accel, rate, notes = load_recording(args.input, args.format, args.rate, args.gyro_unit, args.accel_unit)
+    gyro, accel, rate, notes = load_recording(args.input, args.format, args.rate, args.gyro_unit,
+                                              args.accel_unit)
     for note in notes:
         print(f"note: {note}", file=sys.stderr)
     result = allan_deviation(np.hstack([gyro, accel]), rate, points_per_decade=args.points_per_decade,
@@ -155,7 +161,8 @@ def run(args) -> int:
         header = [
             f"# splineimu allan: noise parameters identified from {args.input}",
             f"# {result.n_samples} samples at {rate:.6g} Hz ({result.duration_s:.1f} s).",
-            "# Each Kalibr key holds [x, y, z]; <key>_avg is their mean, <key>_ci95 the 95% interval per axis.",
+            "# Each Kalibr key holds [x, y, z]; <key>_avg is their mean, <key>_ci95 the 95% interval",
+            "# per axis.",
             "# Units: gyro noise rad/s/sqrt(Hz), gyro walk rad/s^2/sqrt(Hz), accel noise m/s^2/sqrt(Hz),",
             "# accel walk m/s^3/sqrt(Hz). Usable as `--imu` (the `allan` section is informational).",
         ]

@@ -74,7 +74,8 @@ def run(args) -> int:
     t_ns = uniform_stamps_ns(scene.origin_ns, scene.origin_ns + int(round(scene.t_max_s * 1e9)), args.rate)
     seed = seed_or_default(args.seed) if args.imu else args.seed
     syn = synthesize(scene, t_ns, gravity=tuple(args.gravity), extrinsic=load_extrinsic(args.extrinsic),
-                     imu_config=args.imu, seed=seed)
+                     imu_config=args.imu, seed=seed,
+                     sampling=args.sampling, with_increments=args.increments)
     report = {"source": {"kind": "analytic scene", **scene.describe()}, "rate_hz": args.rate}
     rep = write_output(syn, args.out, force=args.force, report=report, bag=args.bag, plot=args.plot)
     say(f"scene         {args.name}, {scene.t_max_s:g} s")
