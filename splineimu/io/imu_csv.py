@@ -79,12 +79,13 @@ def _parse_slow(path):
                 continue
             parts = [p.strip() for p in s.split(",")]
             if len(parts) != 7:
-                raise InputError(f"expected 7 comma-separated fields (t_ns, gyro xyz, accel xyz), got {len(parts)}",
-                                 path, lineno)
+                raise InputError("expected 7 comma-separated fields (t_ns, gyro xyz, accel xyz), "
+                                 f"got {len(parts)}", path, lineno)
             try:
                 tn = int(parts[0])
             except ValueError:
-                raise InputError(f"time stamp must be integer nanoseconds, got {parts[0]!r}", path, lineno) from None
+                raise InputError(f"time stamp must be integer nanoseconds, got {parts[0]!r}",
+                                 path, lineno) from None
             try:
                 vals = [float(p) for p in parts[1:]]
             except ValueError:
@@ -227,7 +228,8 @@ def read_static_rda(path, rate_hz: float = 100.0, gyro_unit: str = "deg/s", acce
         raise InputError(f"no object `{name}` in the file (has {sorted(objs)})", path)
     arr = np.asarray(getattr(objs[name], "values", objs[name]), dtype=np.float64)
     if arr.ndim != 2 or arr.shape[1] != 6:
-        raise InputError(f"expected a matrix with 6 columns (gyro xyz, accel xyz), got shape {arr.shape}", path)
+        raise InputError(f"expected a matrix with 6 columns (gyro xyz, accel xyz), got shape {arr.shape}",
+                         path)
     if not np.all(np.isfinite(arr)):
         row = int(np.flatnonzero(~np.all(np.isfinite(arr), axis=1))[0])
         raise InputError(f"non-finite value in row {row + 1}", path)

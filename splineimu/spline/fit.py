@@ -31,6 +31,12 @@ from ..errors import SplineImuError
 from .basis import blending_matrix
 from .core import KINDS, Spline
 
+#: Gauss-Newton stops when the largest update is below this (rad, or m for SE3 translation)
+GN_STEP_TOL = 1e-9
+#: Outliers: beyond this many robust sigmas and these absolute floors (m, rad)
+OUTLIER_SIGMAS = 8.0
+OUTLIER_FLOOR_M = 2e-3
+OUTLIER_FLOOR_RAD = 2e-3
 #: Relative weight of the default smoothness penalty where data are dense (negligible bias).
 DEFAULT_SMOOTHNESS = 1e-10
 #: Relative penalty weight on control points with little data in their support (gaps, sparse
@@ -303,18 +309,28 @@ class _Problem:
         converged = False
         for it in range(1, max_iter + 1):
             delta = _solve_banded_blocks(H, -g.reshape(-1), damping=lam).reshape(g.shape)
+            step = float(np.abs(delta).max())
             if se3:
                 T = lie.se3_exp(delta)
                 pc_new = pc + np.einsum("nij,nj->ni", Rc, T[:, :3, 3])
                 Rc_new = np.matmul(Rc, T[:, :3, :3])
-                cost_new, H_new, g_new, res_new = self._se3_system(Rc_new, pc_new)
             else:
                 Rc_new = np.matmul(Rc, lie.so3_exp(delta))
-                cost_new, H_new, g_new, res_new = self._so3_system(Rc_new)
             if progress is not None:
                 progress(it)
+            if lam == 0.0 and step < GN_STEP_TOL:
+                # converged: the residuals at the new point differ from these by O(step)
+                Rc = Rc_new
+                if se3:
+                    pc = pc_new
+                converged = True
+                break
+            if se3:
+                cost_new, H_new, g_new, res_new = self._se3_system(Rc_new, pc_new)
+            else:
+                cost_new, H_new, g_new, res_new = self._so3_system(Rc_new)
             if cost_new <= cost * (1 + 1e-12) or not np.isfinite(cost):
-                small = np.abs(delta).max() < 1e-13 or (cost - cost_new) <= tol * max(cost, 1e-300)
+                small = step < 1e-13 or (cost - cost_new) <= tol * max(cost, 1e-300)
                 Rc, cost, H, g, res = Rc_new, cost_new, H_new, g_new, res_new
                 if se3:
                     pc = pc_new
@@ -355,7 +371,8 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
         Integer-nanosecond origin of the time base.
     reject_outliers : bool
         After the first fit, drop poses whose residual exceeds 8 robust standard deviations
-        (and 1e-5 m / 1e-5 rad) and fit again; the report lists them (``dropped_poses``).
+        and 2 mm / 2 mrad (glitches of a tracking system) and fit again from that solution; the
+        report lists them (``dropped_poses``).
     progress : bool
         Show a progress bar for long fits.
     return_report : bool
@@ -436,6 +453,7 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
     dropped = []
     for attempt in range(2):
         Rc, Pc, res_pos, res_rot, iters, conv = _solve(prob, Rc0, kind, max_iter, tick, smoothness, dt)
+        Rc0 = Rc
         if not reject_outliers or attempt == 1:
             break
         bad = _outliers(res_pos, res_rot, prob.w)
@@ -466,16 +484,26 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
 
 
 def _outliers(res_pos, res_rot, w):
-    """Poses whose position or angle residual is beyond 8 robust sigmas (3-D norm)."""
+    """Isolated glitches: poses whose residual departs from its neighbours' (second difference
+    along time) by more than 8 robust sigmas and 2 mm / 2 mrad. Smooth approximation error of
+    the spline, which looks like an outlier by size alone, is not flagged."""
     bad = np.zeros(res_pos.shape[0], dtype=bool)
-    for res, floor in ((res_pos, 1e-5), (res_rot, 1e-5)):
-        e = np.linalg.norm(res, axis=1)
+    if res_pos.shape[0] < 10:
+        return bad
+    for res, floor in ((res_pos, OUTLIER_FLOOR_M), (res_rot, OUTLIER_FLOOR_RAD)):
+        d = np.zeros_like(res)
+        d[1:-1] = res[1:-1] - 0.5 * (res[:-2] + res[2:])
+        e = np.linalg.norm(d, axis=1)
         used = e[w > 0]
-        if used.size < 10:
-            continue
         sigma = np.median(used) / 1.538  # median of a 3-D Gaussian norm is 1.538 sigma
-        bad |= (e > 8.0 * sigma) & (e > floor)
-    return bad & (w > 0)
+        bad |= (e > OUTLIER_SIGMAS * sigma) & (e > floor)
+    # a glitch also disturbs the second difference of its neighbours: keep the locally largest
+    e_all = np.linalg.norm(res_pos, axis=1) / OUTLIER_FLOOR_M + np.linalg.norm(res_rot, axis=1) / OUTLIER_FLOOR_RAD
+    idx = np.flatnonzero(bad)
+    keep = [i for i in idx if e_all[i] >= e_all[max(i - 1, 0): i + 2].max()]
+    out = np.zeros_like(bad)
+    out[keep] = True
+    return out & (w > 0)
 
 
 def _solve(prob, Rc, kind, max_iter, tick, smoothness, dt):

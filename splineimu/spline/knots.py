@@ -31,8 +31,8 @@ from .._kernels import fit as _kf
 from .basis import basis_values, blending_matrix
 
 ACCEL_TO_GYRO_WEIGHT = 10.0
-_N_FREQ = 48
-_SYN_SEGMENTS = 24
+_N_FREQ = 40
+_SYN_SEGMENTS = 16
 
 
 def _uniform_resample(t, X, rate):
@@ -185,7 +185,7 @@ def choose_knot_spacing(t, P, R, order=4, candidates=None):
     if candidates is None:
         lo = 2.0 * med
         hi = max(min(span / 4.0, 2.0), lo * 1.01)
-        candidates = np.geomspace(lo, hi, 20)
+        candidates = np.geomspace(lo, hi, 16)
     orders = [4, 5, 6] if order == "auto" else [int(order)]
     transfer = _Transfer(rate)
     rows = []
