@@ -856,8 +856,7 @@ def write_scene_tum(scene: Scene, path, rate_hz: float) -> Path:
     -----
     Lines are ``timestamp tx ty tz qx qy qz qw`` with the absolute timestamp printed
     exactly from integer nanoseconds as ``"%d.%09d"`` (seconds.nanoseconds) and
-    quaternions made sign-continuous along time. Uses :func:`splineimu.io.tum.write_tum`
-    when that module is available, else a private formatter with the same format.
+    quaternions made sign-continuous along time, through :func:`splineimu.io.tum.write_tum`.
     """
     if isinstance(scene, Scene):
         t_ns = scene.sample_times_ns(rate_hz)
@@ -873,39 +872,10 @@ def write_scene_tum(scene: Scene, path, rate_hz: float) -> Path:
 
     quat = quat_make_continuous(quat)
     path = Path(path)
-    try:
-        from .io.tum import write_tum
-    except ModuleNotFoundError as e:  # the IO module is optional here; its own errors are not
-        if e.name != f"{__package__}.io.tum":
-            raise
-        write_tum = None
-    if write_tum is not None:
-        write_tum(path, t_ns, pos, quat)
-    else:
-        _write_tum_private(path, t_ns, pos, quat)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    from .io.tum import write_tum
+
+    write_tum(path, t_ns, pos, quat)
     return path
 
 
-def _write_tum_private(path: Path, t_ns, pos, quat) -> None:
-    t_ns = np.asarray(t_ns, dtype=np.int64)
-    sec, frac = np.divmod(t_ns, np.int64(1_000_000_000))
-    directory = path.parent if str(path.parent) else Path(".")
-    directory.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=directory)
-    try:
-        with os.fdopen(fd, "w", newline="\n") as f:
-            f.write("# timestamp tx ty tz qx qy qz qw\n")
-            for i in range(t_ns.shape[0]):
-                p = pos[i]
-                q = quat[i]
-                f.write(
-                    f"{int(sec[i])}.{int(frac[i]):09d} {p[0]:.9f} {p[1]:.9f} {p[2]:.9f} "
-                    f"{q[0]:.12f} {q[1]:.12f} {q[2]:.12f} {q[3]:.12f}\n"
-                )
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise

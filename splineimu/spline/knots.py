@@ -58,7 +58,8 @@ def _derivative_spectrum(X, rate, deriv):
     The spectrum is that of Hann-windowed finite differences. The noise level is read from
     the top 40 % of the band, where smooth motion has no power; the signal is what stands
     clearly (2x) above that floor after averaging 16 neighbouring bins, up to the highest
-    such frequency, with the difference filter's response corrected to the true derivative.
+    such frequency, with the difference filter's response corrected to the true derivative
+    (the floor is subtracted from the raw bins, so noise-only bins average out).
     """
     h = 1.0 / rate
     y = np.diff(X, n=deriv, axis=0) / h**deriv
@@ -79,7 +80,9 @@ def _derivative_spectrum(X, rate, deriv):
         top = above[-1] + 1
         nz = slice(1, top)
         true = (2 * np.pi * f[nz]) ** (2 * deriv) / np.maximum(shape[nz] * n / 2.0, 1e-300)
-        S[nz] = np.maximum(Ps[nz] - noise[nz], 0.0) * true
+        # the raw periodogram (not the averaged one, which would smear strong low-frequency lines
+        # to where the spline's error transfer is large); noise-only bins average out
+        S[nz] = (P[nz] - noise[nz]) * true
     return f, S, float(np.sqrt(nvar / X.shape[1]))
 
 
@@ -147,7 +150,7 @@ def _predict(transfer, order, dt, spec_a, spec_g, sig_p, sig_r):
         E, G = res[r]
         Ef = np.minimum(np.interp(f, fr, E, left=E[0], right=1.0), 1.0)
         Ef[f > fr[-1]] = 1.0
-        bias2 = float(np.sum(Ef * S))
+        bias2 = max(float(np.sum(Ef * S)), 0.0)
         var = sigma**2 * G * 3.0
         preds.append(np.sqrt(bias2 + var))
     return preds
@@ -185,7 +188,7 @@ def choose_knot_spacing(t, P, R, order=4, candidates=None):
     if candidates is None:
         lo = 2.0 * med
         hi = max(min(span / 4.0, 2.0), lo * 1.01)
-        candidates = np.geomspace(lo, hi, 16)
+        candidates = np.geomspace(lo, hi, 24)
     orders = [4, 5, 6] if order == "auto" else [int(order)]
     transfer = _Transfer(rate)
     rows = []
