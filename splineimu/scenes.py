@@ -39,8 +39,6 @@ from __future__ import annotations
 import difflib
 import importlib
 import math
-import os
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 

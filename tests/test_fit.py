@@ -36,7 +36,7 @@ def imu_errors(spl, t0, t1, step=0.005):
 # ------------------------------------------------------------------ Jacobians (gradients)
 def _small_problem(kind, seed=0):
     rng = np.random.default_rng(seed)
-    n, k, dt = 8, 4, 0.2
+    n, k = 8, 4
     Rc = lie.so3_exp(rng.normal(size=(n, 3)) * 0.8)
     pc = rng.normal(size=(n, 3))
     nseg = n - k + 1

@@ -5,11 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import yaml
+from conftest import require_shared
 
 from splineimu.errors import ConfigError, InputError
 from splineimu.imu.config import ImuConfig, list_presets, load_imu_config, load_preset
-
-from conftest import require_shared
 
 EVERY_KEY = {
     "gyroscope_noise_density": [1e-4, 2e-4, 3e-4],

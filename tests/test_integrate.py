@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import require_shared
 
 from splineimu import cli
 from splineimu._kernels.integrate import interp_mid_kernel
@@ -11,8 +12,6 @@ from splineimu.errors import ConfigError, InputError
 from splineimu.integrate import METHOD_ORDER, METHODS, NavState, Trajectory, integrate
 from splineimu.lie import quat_xyzw_to_matrix, so3_exp, so3_log
 from splineimu.scenes import make_scene
-
-from conftest import require_shared
 
 G = np.array([0.0, 0.0, -9.81])
 

@@ -26,7 +26,7 @@ def add_pose_args(p, fmt_help):
     g.add_argument("--knot-spacing", default="auto", metavar="S",
                    help="knot spacing in seconds, or auto (default: minimizes the predicted IMU error)")
     g.add_argument("--smoothness", type=float, default=None, metavar="MU",
-                   help="relative weight of the smoothness penalty (default 1e-10: only regularizes gaps and sparse segments)")
+                   help="relative weight of the smoothness penalty (default 1e-10; gaps get 1e-3)")
     g = p.add_argument_group("gaps")
     g.add_argument("--max-gap", type=float, default=None, metavar="S",
                    help="longest gap bridged silently (default 0.5 s, or 5x the median spacing if larger)")

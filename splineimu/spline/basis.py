@@ -14,7 +14,7 @@ cumulative spline reads ``x(u) = x_i + sum_{j>=1} Btilde_j(u) (x_{i+j} - x_{i+j-
 from __future__ import annotations
 
 from fractions import Fraction
-from functools import lru_cache
+from functools import cache
 from math import comb, factorial
 
 import numpy as np
@@ -23,7 +23,7 @@ MIN_ORDER = 2
 MAX_ORDER = 8
 
 
-@lru_cache(maxsize=None)
+@cache
 def _blending_exact(order: int) -> tuple:
     k = order
     rows = []

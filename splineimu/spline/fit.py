@@ -80,7 +80,8 @@ class FitReport:
             f"({self.knot_spacing_source}), {self.n_control} control poses",
             f"fit residual  position rms {self.residual_position_rms_m * 1e3:.4f} mm "
             f"(max {self.residual_position_max_m * 1e3:.4f} mm), angle rms "
-            f"{np.degrees(self.residual_angle_rms_rad):.5f} deg (max {np.degrees(self.residual_angle_max_rad):.5f} deg)",
+            f"{np.degrees(self.residual_angle_rms_rad):.5f} deg "
+            f"(max {np.degrees(self.residual_angle_max_rad):.5f} deg)",
         ]
         kc = self.knot_choice
         if kc and kc.get("predicted_gyro_rms_rad_s") is not None:
@@ -498,7 +499,8 @@ def _outliers(res_pos, res_rot, w):
         sigma = np.median(used) / 1.538  # median of a 3-D Gaussian norm is 1.538 sigma
         bad |= (e > OUTLIER_SIGMAS * sigma) & (e > floor)
     # a glitch also disturbs the second difference of its neighbours: keep the locally largest
-    e_all = np.linalg.norm(res_pos, axis=1) / OUTLIER_FLOOR_M + np.linalg.norm(res_rot, axis=1) / OUTLIER_FLOOR_RAD
+    e_all = (np.linalg.norm(res_pos, axis=1) / OUTLIER_FLOOR_M
+             + np.linalg.norm(res_rot, axis=1) / OUTLIER_FLOOR_RAD)
     idx = np.flatnonzero(bad)
     keep = [i for i in idx if e_all[i] >= e_all[max(i - 1, 0): i + 2].max()]
     out = np.zeros_like(bad)
