@@ -8,9 +8,11 @@ API uses ``quat_xyzw`` and converts here, at the file boundary.
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 
-from .output import _format_table_view, atomic_write_bytes
+from .output import atomic_write_bytes, format_table_chunks
 from .poses import PoseTrack, clean_poses
 from .timestamps import _is_integer_text, parse_stamps, read_table
 
@@ -185,9 +187,9 @@ def write_euroc_imu(path, t_ns, gyro, accel, header: str | None = None):
     """
     t = _stamps(t_ns)
     n = t.shape[0]
-    body = _format_table_view(t, np.hstack([_rows(gyro, n, 3, "gyro"), _rows(accel, n, 3, "accel")]))
+    body = format_table_chunks(t, np.hstack([_rows(gyro, n, 3, "gyro"), _rows(accel, n, 3, "accel")]))
     head = EUROC_IMU_HEADER if header is None else header
-    return atomic_write_bytes(path, [(head + "\n").encode(), body])
+    return atomic_write_bytes(path, itertools.chain([(head + "\n").encode()], body))
 
 
 def write_euroc_groundtruth(path, t_ns, positions, quat_xyzw, velocity_world, bias_gyro, bias_accel):
@@ -237,5 +239,5 @@ def write_euroc_groundtruth(path, t_ns, positions, quat_xyzw, velocity_world, bi
         _rows(bias_gyro, n, 3, "bias_gyro"),
         _rows(bias_accel, n, 3, "bias_accel"),
     ])
-    body = _format_table_view(t, table)
-    return atomic_write_bytes(path, [(EUROC_GROUNDTRUTH_HEADER + "\n").encode(), body])
+    body = format_table_chunks(t, table)
+    return atomic_write_bytes(path, itertools.chain([(EUROC_GROUNDTRUTH_HEADER + "\n").encode()], body))

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._jit import jit
+from .._jit import jit, prange
 from ..errors import OutputExistsError
 
 __all__ = [
@@ -207,8 +207,9 @@ def atomic_write_bytes(path, data) -> Path:
     ----------
     path : str or os.PathLike
         Target file; it is replaced if it exists. Its folder must exist.
-    data : bytes-like, or list/tuple of bytes-like
-        The content; a list is written piece by piece (no concatenated copy).
+    data : bytes-like, or an iterable of bytes-like
+        The content; an iterable (list, generator) is written piece by piece as it comes
+        (no concatenated copy).
 
     Returns
     -------
@@ -232,7 +233,7 @@ def atomic_write_bytes(path, data) -> Path:
             continue
     try:
         with os.fdopen(fd, "wb") as f:
-            for chunk in data if isinstance(data, (list, tuple)) else (data,):
+            for chunk in (data,) if isinstance(data, (bytes, bytearray, memoryview)) else data:
                 f.write(chunk)
             f.flush()
             os.fsync(f.fileno())
@@ -560,6 +561,62 @@ def format_table(t_ns, values, *, sep: str = ",", stamp: str = "ns") -> bytes:
     b'0.005000000 1e-07 0\\n'
     """
     return bytes(_format_table_view(t_ns, values, sep=sep, stamp=stamp))
+
+
+@jit(parallel=True)
+def _format_blocks_kernel(t_ns, values, sep, stamp_mode, row_starts, out, out_starts, lens):
+    """Format row blocks in parallel, each into its own region of ``out``."""
+    for b in prange(row_starts.shape[0] - 1):
+        r0 = row_starts[b]
+        r1 = row_starts[b + 1]
+        lens[b] = _format_table_kernel(t_ns[r0:r1], values[r0:r1], sep, stamp_mode,
+                                       out[out_starts[b]:out_starts[b + 1]])
+
+
+#: rows per piece of :func:`format_table_chunks` (bounds the buffer to ~30 MB for 16 columns)
+CHUNK_ROWS = 1 << 16
+_BLOCKS = 8
+
+
+def format_table_chunks(t_ns, values, *, sep: str = ",", stamp: str = "ns"):
+    """:func:`format_table` as a generator of pieces (memoryviews), formatted in parallel
+    blocks, so that large tables stream to a file without one huge buffer."""
+    t, v = _check_table(t_ns, values, sep, stamp)
+    if v.size and np.abs(v).max() >= _KERNEL_MAX_ABS:
+        yield memoryview(_format_table_python(t, v, sep, stamp))
+        return
+    rowmax = 23 + 27 * v.shape[1]
+    for c0 in range(0, t.shape[0], CHUNK_ROWS):
+        c1 = min(c0 + CHUNK_ROWS, t.shape[0])
+        rows = np.linspace(c0, c1, _BLOCKS + 1).astype(np.int64)
+        offs = (rows - c0) * rowmax + np.arange(_BLOCKS + 1)
+        out = np.empty(int(offs[-1]) + 1, dtype=np.uint8)
+        lens = np.zeros(_BLOCKS, dtype=np.int64)
+        _format_blocks_kernel(t, v, np.uint8(ord(sep)), 0 if stamp == "ns" else 1, rows, out, offs, lens)
+        for b in range(_BLOCKS):
+            if lens[b]:
+                yield memoryview(out[offs[b]:offs[b] + lens[b]])
+
+
+def _check_table(t_ns, values, sep, stamp):
+    t = np.ascontiguousarray(t_ns)
+    if t.ndim != 1 or not (np.issubdtype(t.dtype, np.integer) or t.size == 0):
+        raise ValueError(f"Expected `t_ns` to be a 1-D integer array, got dtype {t.dtype} shape {t.shape}")
+    t = t.astype(np.int64, copy=False)
+    v = np.ascontiguousarray(values, dtype=np.float64)
+    if v.ndim == 1:
+        v = v[:, None]
+    if v.ndim != 2 or v.shape[0] != t.shape[0]:
+        raise ValueError(f"Expected `values` to have shape ({t.shape[0]}, C), got {np.shape(values)}")
+    if len(sep) != 1 or not sep.isascii():
+        raise ValueError(f"Expected `sep` to be one ASCII character, got {sep!r}")
+    if stamp not in ("ns", "s"):
+        raise ValueError(f"Expected `stamp` to be 'ns' or 's', got {stamp!r}")
+    finite = np.isfinite(v)
+    if not finite.all():
+        i, j = np.argwhere(~finite)[0]
+        raise ValueError(f"Expected finite values, got {v[i, j]} at row {i}, column {j}")
+    return t, v
 
 
 def _format_table_view(t_ns, values, *, sep: str = ",", stamp: str = "ns"):

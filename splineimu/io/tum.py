@@ -7,9 +7,11 @@ and the Hamilton quaternion ``world_R_body`` with ``w`` last.
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 
-from .output import _format_table_view, atomic_write_bytes
+from .output import atomic_write_bytes, format_table_chunks
 from .poses import PoseTrack, clean_poses
 from .timestamps import parse_stamps, read_table
 
@@ -137,6 +139,6 @@ def write_tum(path, t_ns, positions, quat_xyzw, header: bool = True):
         raise ValueError(f"Expected `positions` to have shape ({n}, 3), got {p.shape}")
     if q.shape != (n, 4):
         raise ValueError(f"Expected `quat_xyzw` to have shape ({n}, 4), got {q.shape}")
-    body = _format_table_view(t, np.hstack([p, q]), sep=" ", stamp="s")
+    body = format_table_chunks(t, np.hstack([p, q]), sep=" ", stamp="s")
     head = (TUM_HEADER + "\n").encode() if header else b""
-    return atomic_write_bytes(path, [head, body])
+    return atomic_write_bytes(path, itertools.chain([head], body))
