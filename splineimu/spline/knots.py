@@ -185,20 +185,31 @@ def choose_knot_spacing(t, P, R, order=4, candidates=None):
     f_a, S_a, sig_p = _derivative_spectrum(Pu, rs, 2)
     f_g, S_g, sig_r = _derivative_spectrum(Tu, rs, 1)
     spec_a, spec_g = (f_a, S_a), (f_g, S_g)
+    refine = candidates is None
     if candidates is None:
         lo = 2.0 * med
         hi = max(min(span / 4.0, 2.0), lo * 1.01)
-        candidates = np.geomspace(lo, hi, 24)
+        candidates = np.geomspace(lo, hi, 12)
     orders = [4, 5, 6] if order == "auto" else [int(order)]
     transfer = _Transfer(rate)
     rows = []
+
+    def evaluate(k, dt):
+        ea, eg = _predict(transfer, k, dt, spec_a, spec_g, sig_p, sig_r)
+        cost = (ea / ACCEL_TO_GYRO_WEIGHT) ** 2 + eg**2
+        rows.append((k, float(dt), float(ea), float(eg), float(cost)))
+
     for k in orders:
         for dt in candidates:
-            if span / dt < 1:
-                continue
-            ea, eg = _predict(transfer, k, dt, spec_a, spec_g, sig_p, sig_r)
-            cost = (ea / ACCEL_TO_GYRO_WEIGHT) ** 2 + eg**2
-            rows.append((k, float(dt), float(ea), float(eg), float(cost)))
+            if span / dt >= 1:
+                evaluate(k, dt)
+    if refine and len(candidates) > 2:
+        # coarse-to-fine: a finer grid between the neighbours of the best coarse spacing
+        k0, dt0 = min(rows, key=lambda r: r[4])[:2]
+        step = candidates[1] / candidates[0]
+        for dt in np.geomspace(dt0 / step, dt0 * step, 7)[1:-1]:
+            if dt != dt0 and dt >= candidates[0] and span / dt >= 1:
+                evaluate(k0, dt)
     best = min(rows, key=lambda r: r[4])
     return {
         "knot_spacing_s": best[1],
