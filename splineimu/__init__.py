@@ -13,11 +13,14 @@ from __future__ import annotations
 __version__ = "0.1.0"
 
 from .errors import ConfigError, InputError, RangeError, SplineImuError  # noqa: E402
-from .motion import Kinematics, MotionSource  # noqa: E402
 
 
 def __getattr__(name):
-    # Lazy so that `splineimu --help` does not compile or load kernels.
+    # Lazy so that `splineimu --help` does not compile or load kernels (nor import numpy).
+    if name in ("Kinematics", "MotionSource"):
+        from . import motion
+
+        return getattr(motion, name)
     if name == "Spline":
         from .spline import Spline
 

@@ -7,13 +7,20 @@ Each subcommand lives in :mod:`splineimu.commands` as a module with ``NAME``, ``
 
 from __future__ import annotations
 
-import argparse
-import importlib
-import pkgutil
-import sys
+import os
 
-from . import __version__
-from .errors import SplineImuError
+# Small banded solves and vector maths: BLAS threads only contend (and spin) on a busy machine.
+# Set before numpy is imported; a user's explicit setting wins.
+for _var in ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "OMP_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import argparse  # noqa: E402
+import importlib  # noqa: E402
+import pkgutil  # noqa: E402
+import sys  # noqa: E402
+
+from . import __version__  # noqa: E402
+from .errors import SplineImuError  # noqa: E402
 
 
 def _commands():
