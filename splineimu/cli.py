@@ -71,6 +71,10 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:
         print("splineimu: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # e.g. `splineimu allan ... | head`
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 1
 
 
 if __name__ == "__main__":  # pragma: no cover
