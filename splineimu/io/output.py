@@ -621,23 +621,7 @@ def _check_table(t_ns, values, sep, stamp):
 
 def _format_table_view(t_ns, values, *, sep: str = ",", stamp: str = "ns"):
     """:func:`format_table` as a memoryview of the output buffer (no copy)."""
-    t = np.ascontiguousarray(t_ns)
-    if t.ndim != 1 or not (np.issubdtype(t.dtype, np.integer) or t.size == 0):
-        raise ValueError(f"Expected `t_ns` to be a 1-D integer array, got dtype {t.dtype} shape {t.shape}")
-    t = t.astype(np.int64, copy=False)
-    v = np.ascontiguousarray(values, dtype=np.float64)
-    if v.ndim == 1:
-        v = v[:, None]
-    if v.ndim != 2 or v.shape[0] != t.shape[0]:
-        raise ValueError(f"Expected `values` to have shape ({t.shape[0]}, C), got {np.shape(values)}")
-    if len(sep) != 1 or not sep.isascii():
-        raise ValueError(f"Expected `sep` to be one ASCII character, got {sep!r}")
-    if stamp not in ("ns", "s"):
-        raise ValueError(f"Expected `stamp` to be 'ns' or 's', got {stamp!r}")
-    finite = np.isfinite(v)
-    if not finite.all():
-        i, j = np.argwhere(~finite)[0]
-        raise ValueError(f"Expected finite values, got {v[i, j]} at row {i}, column {j}")
+    t, v = _check_table(t_ns, values, sep, stamp)
     if v.size and np.abs(v).max() >= _KERNEL_MAX_ABS:
         return memoryview(_format_table_python(t, v, sep, stamp))
     out = np.empty(t.shape[0] * (23 + 27 * v.shape[1]) + 1, dtype=np.uint8)
