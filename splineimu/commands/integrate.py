@@ -84,58 +84,26 @@ def run(args) -> int:
 
 
 # ----------------------------------------------------------------------------- file helpers
-# The IMU csv is read by splineimu.io.imu_csv and the TUM text is made by splineimu.io.output;
-# the EuRoC ground-truth reader below is private (splineimu.io.euroc was not available yet).
-
-
-def _read_csv_numbers(path: Path, ncols: int, what: str):
-    """(int64 first column, float64 other columns) of a comma-separated file with '#' headers."""
-    import numpy as np
-
-    from ..errors import InputError
-
-    if not path.is_file():
-        raise InputError("no such file", path=path)
-    stamps = []
-    rows = []
-    with open(path, encoding="utf-8") as fh:
-        for lineno, line in enumerate(fh, start=1):
-            s = line.strip()
-            if not s or s.startswith("#"):
-                continue
-            parts = s.split(",")
-            if len(parts) < ncols:
-                raise InputError(f"expected {ncols} comma-separated columns ({what}), got {len(parts)}",
-                                 path=path, line=lineno)
-            try:
-                stamps.append(int(parts[0]))
-                rows.append([float(x) for x in parts[1:ncols]])
-            except ValueError:
-                raise InputError(f"not a number in {s[:60]!r} (first column must be integer ns)",
-                                 path=path, line=lineno) from None
-            if len(stamps) > 1 and stamps[-1] <= stamps[-2]:
-                raise InputError(f"time stamps must increase ({stamps[-1]} after {stamps[-2]})",
-                                 path=path, line=lineno)
-    if not stamps:
-        raise InputError("no data rows", path=path)
-    vals = np.asarray(rows, dtype=np.float64)
-    if not np.all(np.isfinite(vals)):
-        raise InputError("contains NaN or inf", path=path)
-    return np.asarray(stamps, dtype=np.int64), vals
+# The IMU csv is read by splineimu.io.imu_csv, the ground truth by splineimu.io.euroc and the
+# TUM text is made by splineimu.io.output.
 
 
 def read_groundtruth(path):
     """EuRoC ground truth (17 columns, quaternion w x y z) -> dict of arrays, quat in xyzw."""
-    import numpy as np
+    from ..errors import InputError
+    from ..io.euroc import read_euroc_groundtruth
 
-    t, v = _read_csv_numbers(Path(path), 17, "ns, p xyz, q wxyz, v xyz, b_w xyz, b_a xyz")
+    track = read_euroc_groundtruth(path)
+    if track.velocity_world is None:
+        raise InputError("needs the 17-column EuRoC ground truth (velocity and biases) for the "
+                         "initial state", path=path)
     return {
-        "t_ns": t,
-        "positions": v[:, 0:3].copy(),
-        "quat_xyzw": np.ascontiguousarray(v[:, [4, 5, 6, 3]]),
-        "velocity_world": v[:, 7:10].copy(),
-        "bias_gyro": v[:, 10:13].copy(),
-        "bias_accel": v[:, 13:16].copy(),
+        "t_ns": track.t_ns,
+        "positions": track.positions,
+        "quat_xyzw": track.quat_xyzw,
+        "velocity_world": track.velocity_world,
+        "bias_gyro": track.bias_gyro,
+        "bias_accel": track.bias_accel,
     }
 
 

@@ -62,36 +62,15 @@ def add_arguments(parser) -> None:
 
 
 def read_euroc_groundtruth(path):
-    """EuRoC ground truth -> (t_ns, p, quat_xyzw, v, b_w, b_a); plain pandas reader."""
-    import numpy as np
-    import pandas as pd
-
+    """EuRoC ground truth -> (t_ns, p, quat_xyzw, v, b_w, b_a), through :mod:`splineimu.io.euroc`."""
     from ..errors import InputError
+    from ..io.euroc import read_euroc_groundtruth as _read
 
-    path = Path(path)
-    if not path.is_file():
-        raise InputError("file not found", path)
-    try:
-        df = pd.read_csv(path, comment="#", header=None, skip_blank_lines=True, dtype=str)
-    except Exception as e:  # noqa: BLE001
-        raise InputError(f"cannot read as csv: {e}", path) from None
-    if df.shape[0] == 0:
-        raise InputError("no data rows", path)
-    if df.shape[1] < 17:
-        raise InputError("expected 17 columns (ns, p xyz, q wxyz, v xyz, b_w xyz, b_a xyz), "
-                         f"got {df.shape[1]}", path)
-    try:
-        t_ns = np.array([int(s.strip()) for s in df.iloc[:, 0]], dtype=np.int64)
-        v = df.iloc[:, 1:17].astype(np.float64).to_numpy()
-    except ValueError as e:
-        raise InputError(f"not a number: {e}", path) from None
-    if not np.all(np.isfinite(v)):
-        raise InputError("contains NaN or inf", path)
-    bad = np.flatnonzero(np.diff(t_ns) <= 0)
-    if bad.size:
-        raise InputError(f"time stamps must increase ({t_ns[bad[0] + 1]} after {t_ns[bad[0]]})", path)
-    return (t_ns, v[:, 0:3].copy(), np.ascontiguousarray(v[:, [4, 5, 6, 3]]), v[:, 7:10].copy(),
-            v[:, 10:13].copy(), v[:, 13:16].copy())
+    track = _read(path)
+    if track.velocity_world is None:
+        raise InputError("expected 17 columns (ns, p xyz, q wxyz, v xyz, b_w xyz, b_a xyz)", path)
+    return (track.t_ns, track.positions, track.quat_xyzw, track.velocity_world, track.bias_gyro,
+            track.bias_accel)
 
 
 def read_noise_yaml(spec) -> dict:
