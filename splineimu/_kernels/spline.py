@@ -96,15 +96,51 @@ def eval_split(s_all, nseg, dt, Rc, D, Pc, Mc, M, g, want,
     A = np.empty((3, 3))
     T = np.empty((3, 3))
     q = np.empty(4)
-    need_rot = (want & (WANT_ROT | WANT_QUAT | WANT_FORCE)) != 0
+    # the rotation matrix is built only when it is an output; the specific force alone is
+    # carried through the product as a vector (R^T f = A_{k-1}^T .. A_1^T R_i^T f)
+    need_rot = (want & (WANT_ROT | WANT_QUAT)) != 0
+    need_fvec = (want & WANT_FORCE) != 0 and not need_rot
     need_w = (want & (WANT_OMEGA | WANT_ALPHA)) != 0
     need_wd = (want & WANT_ALPHA) != 0
     for i in range(s_all.shape[0]):
         seg, u = _segment(s_all[i], nseg)
         _basis_rows(Mc, M, u, inv_dt, b, bd, bdd, pb, pbd, pbdd)
-        for r in range(3):
-            for c in range(3):
-                R[r, c] = Rc[seg, r, c]
+        # position and its derivatives
+        p0 = 0.0
+        p1 = 0.0
+        p2 = 0.0
+        v0 = 0.0
+        v1 = 0.0
+        v2 = 0.0
+        c0 = 0.0
+        c1 = 0.0
+        c2 = 0.0
+        for j in range(k):
+            x0 = Pc[seg + j, 0]
+            x1 = Pc[seg + j, 1]
+            x2 = Pc[seg + j, 2]
+            p0 += pb[j] * x0
+            p1 += pb[j] * x1
+            p2 += pb[j] * x2
+            v0 += pbd[j] * x0
+            v1 += pbd[j] * x1
+            v2 += pbd[j] * x2
+            c0 += pbdd[j] * x0
+            c1 += pbdd[j] * x1
+            c2 += pbdd[j] * x2
+        if need_rot:
+            for r in range(3):
+                for c in range(3):
+                    R[r, c] = Rc[seg, r, c]
+        h0 = c0 - g[0]
+        h1 = c1 - g[1]
+        h2 = c2 - g[2]
+        if need_fvec:
+            f0 = Rc[seg, 0, 0] * h0 + Rc[seg, 1, 0] * h1 + Rc[seg, 2, 0] * h2
+            f1 = Rc[seg, 0, 1] * h0 + Rc[seg, 1, 1] * h1 + Rc[seg, 2, 1] * h2
+            f2 = Rc[seg, 0, 2] * h0 + Rc[seg, 1, 2] * h1 + Rc[seg, 2, 2] * h2
+        else:
+            f0 = f1 = f2 = 0.0
         w0 = 0.0
         w1 = 0.0
         w2 = 0.0
@@ -115,7 +151,15 @@ def eval_split(s_all, nseg, dt, Rc, D, Pc, Mc, M, g, want,
             d0 = D[seg + j, 0]
             d1 = D[seg + j, 1]
             d2 = D[seg + j, 2]
+            if not (need_rot or need_w or need_fvec):
+                continue
             so3_exp_into(b[j] * d0, b[j] * d1, b[j] * d2, A)
+            if need_fvec:
+                y0 = A[0, 0] * f0 + A[1, 0] * f1 + A[2, 0] * f2
+                y1 = A[0, 1] * f0 + A[1, 1] * f1 + A[2, 1] * f2
+                f2 = A[0, 2] * f0 + A[1, 2] * f1 + A[2, 2] * f2
+                f0 = y0
+                f1 = y1
             if need_rot:
                 for r in range(3):
                     x0 = R[r, 0]
@@ -146,29 +190,6 @@ def eval_split(s_all, nseg, dt, Rc, D, Pc, Mc, M, g, want,
                 w0 = r0 + e0
                 w1 = r1 + e1
                 w2 = r2 + e2
-        # position and its derivatives
-        p0 = 0.0
-        p1 = 0.0
-        p2 = 0.0
-        v0 = 0.0
-        v1 = 0.0
-        v2 = 0.0
-        c0 = 0.0
-        c1 = 0.0
-        c2 = 0.0
-        for j in range(k):
-            x0 = Pc[seg + j, 0]
-            x1 = Pc[seg + j, 1]
-            x2 = Pc[seg + j, 2]
-            p0 += pb[j] * x0
-            p1 += pb[j] * x1
-            p2 += pb[j] * x2
-            v0 += pbd[j] * x0
-            v1 += pbd[j] * x1
-            v2 += pbd[j] * x2
-            c0 += pbdd[j] * x0
-            c1 += pbdd[j] * x1
-            c2 += pbdd[j] * x2
         if want & WANT_ROT:
             for r in range(3):
                 for c in range(3):
@@ -200,12 +221,13 @@ def eval_split(s_all, nseg, dt, Rc, D, Pc, Mc, M, g, want,
             out_a[i, 1] = c1
             out_a[i, 2] = c2
         if want & WANT_FORCE:
-            f0 = c0 - g[0]
-            f1 = c1 - g[1]
-            f2 = c2 - g[2]
-            out_f[i, 0] = R[0, 0] * f0 + R[1, 0] * f1 + R[2, 0] * f2
-            out_f[i, 1] = R[0, 1] * f0 + R[1, 1] * f1 + R[2, 1] * f2
-            out_f[i, 2] = R[0, 2] * f0 + R[1, 2] * f1 + R[2, 2] * f2
+            if need_rot:
+                f0 = R[0, 0] * h0 + R[1, 0] * h1 + R[2, 0] * h2
+                f1 = R[0, 1] * h0 + R[1, 1] * h1 + R[2, 1] * h2
+                f2 = R[0, 2] * h0 + R[1, 2] * h1 + R[2, 2] * h2
+            out_f[i, 0] = f0
+            out_f[i, 1] = f1
+            out_f[i, 2] = f2
 
 
 @jit
