@@ -121,6 +121,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import ConfigError, InputError
+from .imu.noise import _as_samples
 
 __all__ = [
     "SteadyPhase", "SensorCalibration", "AccelCalibration", "GyroCalibration",
@@ -156,15 +157,6 @@ def _as_time(t_ns):
         i = int(np.flatnonzero(d <= 0)[0]) + 1
         raise InputError(f"`t_ns` must be strictly increasing: t_ns[{i}] = {int(t[i])} after {int(t[i - 1])}")
     return t
-
-
-def _as_samples(x, n, name):
-    a = np.asarray(x, dtype=np.float64)
-    if a.shape != (n, 3):
-        raise InputError(f"Expected `{name}` to have shape ({n}, 3), got {a.shape}")
-    if not np.all(np.isfinite(a)):
-        raise InputError(f"`{name}` contains NaN or infinite values")
-    return np.ascontiguousarray(a)
 
 
 def _moving_std(x, half):

@@ -38,7 +38,7 @@ import math
 import numpy as np
 
 from .errors import ConfigError
-from .scenes import Param, Scene, register_scene
+from .scenes import Param, Scene, _rz, register_scene
 
 __all__ = ["CalibrationScene", "SixPositionScene", "RateTableScene", "min_jerk", "nominal_up_rotation"]
 
@@ -95,17 +95,6 @@ def _rotvec_between(Ra, Rb):
     from .lie import so3_log
 
     return np.asarray(so3_log(Ra.T @ Rb), dtype=np.float64)
-
-
-def _rz(angle):
-    c, s = np.cos(angle), np.sin(angle)
-    R = np.zeros(np.shape(angle) + (3, 3))
-    R[..., 0, 0] = c
-    R[..., 0, 1] = -s
-    R[..., 1, 0] = s
-    R[..., 1, 1] = c
-    R[..., 2, 2] = 1.0
-    return R
 
 
 def _seed(value, label) -> int:

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import OutputExistsError
-from .output import _remove, _unique_sibling
+from .output import _remove, _unique_sibling, replace_path
 
 __all__ = ["write_bag", "BAG_KINDS"]
 
@@ -217,17 +217,7 @@ def write_bag(
                                   orientation=Quaternion(x=qx, y=qy, z=qz, w=qw)),
                     )
                     writer.write(c_pose, t, serialize(msg, pose_type))
-        if path.exists() or path.is_symlink():
-            old = _unique_sibling(path, "old")
-            os.rename(path, old)
-            try:
-                os.rename(tmp, path)
-            except BaseException:
-                os.rename(old, path)
-                raise
-            _remove(old)
-        else:
-            os.rename(tmp, path)
+        replace_path(tmp, path)
     finally:
         _remove(tmp_parent)
     return path

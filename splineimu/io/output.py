@@ -86,6 +86,22 @@ def _unique_sibling(path: Path, tag: str) -> Path:
     return path.parent / f".{path.name}.{tag}-{secrets.token_hex(4)}"
 
 
+def replace_path(new: Path, path: Path) -> None:
+    """Put ``new`` (file or folder) at ``path``: an existing ``path`` is renamed aside first,
+    restored if the rename fails, and deleted only once ``new`` is in place."""
+    if not (path.exists() or path.is_symlink()):
+        os.rename(new, path)
+        return
+    old = _unique_sibling(path, "old")
+    os.rename(path, old)
+    try:
+        os.rename(new, path)
+    except BaseException:
+        os.rename(old, path)
+        raise
+    _remove(old)
+
+
 def _remove(path: Path) -> None:
     if path.is_dir() and not path.is_symlink():
         shutil.rmtree(path, ignore_errors=True)
@@ -180,23 +196,13 @@ class OutputFolder:
 
     def _commit(self, tmp: Path) -> None:
         out = self.path
-        if not (out.exists() or out.is_symlink()):
-            os.rename(tmp, out)
-            return
         if out.is_dir() and not out.is_symlink() and not any(out.iterdir()):
             os.rmdir(out)
             os.rename(tmp, out)
             return
         if not self.force:
             check_output_dir(out, False)  # raises: something appeared while we worked
-        old = _unique_sibling(out, "old")
-        os.rename(out, old)
-        try:
-            os.rename(tmp, out)
-        except BaseException:
-            os.rename(old, out)
-            raise
-        _remove(old)
+        replace_path(tmp, out)
 
 
 def atomic_write_bytes(path, data) -> Path:
