@@ -195,6 +195,11 @@ def test_format_table_lossless_across_magnitudes():
         np.round(rng.normal(size=n), 6),  # real-data-like: short decimals
         [5e-324, 2.2250738585072014e-308, 1e17, 99999999999999999.0, 8.99e18, 9.9999999999999995e-6,
          1e-5, 0.5, 1.0, 2.0**53 + 2, 1e16, 1e15 - 1, 0.1 + 0.2, 1 / 3, 2 / 3],
+        # exact halfway cases of the 17th digit (round half to even): n + 0.25 / 0.75 at 1e15,
+        # n + 1/8 .. 7/8 at 1e14, and the same scaled by powers of two
+        rng.integers(10**15, 9 * 10**15, 500) + rng.choice([0.25, 0.75], 500),
+        rng.integers(10**14, 9 * 10**14, 500) + rng.choice([0.125, 0.375, 0.625, 0.875], 500),
+        (rng.integers(10**15, 9 * 10**15, 500) + 0.75) * 2.0 ** rng.integers(-60, -1, 500),
     ])
     _check_values(x)
 
