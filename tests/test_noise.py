@@ -124,6 +124,26 @@ def test_same_seed_same_bytes():
     assert not np.array_equal(sm.apply(t, g, a, rng=r1).gyro, x1.gyro)
 
 
+@pytest.mark.parametrize("pieces", [[5000], [1, 4999], [2500, 2500], [1, 1, 1, 3, 994, 4000], [7] * 714 + [2]])
+def test_pieces_give_the_same_bytes_as_the_whole_record(pieces):
+    """SensorModel.stream: every process continues across pieces (random walk, Gauss-Markov,
+    turn-on bias, white noise, temperature, quantization), bit for bit."""
+    t, g, a = moving(5000)
+    t = t + 1e-4 * np.sin(np.arange(5000))  # irregular intervals: the steps across pieces matter
+    cfg = dict(FULL, gyroscope_quantization=1e-4, accelerometer_bias_temperature_coefficient=[1e-3, 0, 0],
+               temperature_profile={"start": 20.0, "rate": 0.01})
+    sm = model(**cfg)
+    whole = sm.apply(t, g, a, rng=123)
+    st = sm.stream(rng=123, dt_white_s=float(np.median(np.diff(t))))
+    edges = np.cumsum([0] + pieces)
+    parts = [st.apply(t[i:j], g[i:j], a[i:j]) for i, j in zip(edges[:-1], edges[1:])]
+    for name in ("gyro", "accel", "bias_gyro", "bias_accel"):
+        assert np.vstack([getattr(m, name) for m in parts]).tobytes() == getattr(whole, name).tobytes(), name
+    assert parts[-1].applied == whole.applied
+    with pytest.raises(InputError, match="strictly increasing"):
+        st.apply(t[-1:], g[-1:], a[-1:])
+
+
 def test_child_streams_follow_the_documented_order():
     # child i of seed s is SeedSequence(s, spawn_key=(i,)): white noise of the gyro is child 0
     n = 1000

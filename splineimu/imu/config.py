@@ -169,14 +169,16 @@ class TemperatureProfile:
     table_t_s: np.ndarray | None = field(default=None, compare=False, repr=False)
     table_c: np.ndarray | None = field(default=None, compare=False, repr=False)
 
-    def __call__(self, t_s) -> np.ndarray:
-        """Temperature [degC] at ``t_s`` (seconds since the first sample)."""
+    def __call__(self, t_s, t_first_s: float | None = None) -> np.ndarray:
+        """Temperature [degC] at ``t_s``; the profile's time is seconds since ``t_first_s``
+        (the record's first sample; default ``t_s[0]``)."""
         t = np.asarray(t_s, dtype=np.float64)
         if self.constant_c is not None:
             return np.full(t.shape, self.constant_c)
+        t0 = t_first_s if t_first_s is not None else (t.flat[0] if t.size else 0.0)
         if self.start_c is not None:
-            return self.start_c + self.rate_c_per_s * (t - (t.flat[0] if t.size else 0.0))
-        return np.interp(t - (t.flat[0] if t.size else 0.0), self.table_t_s, self.table_c)
+            return self.start_c + self.rate_c_per_s * (t - t0)
+        return np.interp(t - t0, self.table_t_s, self.table_c)
 
     def to_yaml_value(self):
         if self.constant_c is not None:

@@ -58,7 +58,7 @@ from .._kernels import noise as _k
 from ..errors import ConfigError, InputError
 from .config import SENSORS, ImuConfig, load_imu_config
 
-__all__ = ["SensorModel", "ImuMeasurement", "NOISE_PROCESSES", "DEFAULT_TEMPERATURE_REFERENCE_C"]
+__all__ = ["SensorModel", "SensorStream", "ImuMeasurement", "NOISE_PROCESSES", "DEFAULT_TEMPERATURE_REFERENCE_C"]
 
 #: Noise processes in the order their child generators are derived (append-only).
 NOISE_PROCESSES = (
@@ -212,7 +212,7 @@ class SensorModel:
             out += [f"{s}.{n}" for n, on in names if on]
         return out
 
-    def _temperature(self, t, temperature_c):
+    def _temperature(self, t, temperature_c, t_first=None):
         cfg = self.config
         if temperature_c is not None:
             T = np.asarray(temperature_c, dtype=np.float64)
@@ -225,7 +225,7 @@ class SensorModel:
                 raise InputError("`temperature_c` contains NaN or infinite values")
             return T
         if cfg.temperature_profile is not None:
-            return cfg.temperature_profile(t)
+            return cfg.temperature_profile(t, t_first)
         return None
 
     def apply(self, t_s, gyro, accel, rng=None, temperature_c=None) -> ImuMeasurement:
@@ -256,38 +256,48 @@ class SensorModel:
             Temperature coefficients without any temperature; a single sample with white
             noise but no ``update_rate``; a bad ``rng``.
         """
-        t = np.asarray(t_s, dtype=np.float64)
-        if t.ndim != 1 or t.size == 0:
-            raise InputError(f"Expected `t_s` to have shape (N,) with N >= 1, got {t.shape}")
-        if not np.all(np.isfinite(t)):
-            raise InputError("`t_s` contains NaN or infinite values")
-        n = t.size
-        g = _as_samples(gyro, n, "gyro")
-        a = _as_samples(accel, n, "accel")
-        dt = np.ascontiguousarray(np.diff(t))
-        if n > 1 and np.any(dt <= 0):
-            i = int(np.flatnonzero(dt <= 0)[0]) + 1
-            raise InputError(f"`t_s` must be strictly increasing: t_s[{i}] = {t[i]!r} after {t[i - 1]!r}")
-        cfg = self.config
-        if n > 1:
+        t = _as_times(t_s)
+        dt = np.diff(t)
+        if t.size > 1:
             dt_white = float(np.median(dt))
-        elif cfg.update_rate is not None:
-            dt_white = 1.0 / cfg.update_rate
+        elif self.config.update_rate is not None:
+            dt_white = 1.0 / self.config.update_rate
         else:
             dt_white = float("nan")
-        T = self._temperature(t, temperature_c)
-        streams = _Streams(rng)
-        applied: list[str] = []
-        out = {}
-        for s in SENSORS:
-            x = g if s == "gyroscope" else a
-            out[s] = self._sensor(s, x, a, t, dt, dt_white, T, streams, applied)
-        return ImuMeasurement(t_s=t, gyro=out["gyroscope"][0], accel=out["accelerometer"][0],
-                              bias_gyro=out["gyroscope"][1], bias_accel=out["accelerometer"][1],
-                              applied=applied, temperature_c=T, dt_white_s=dt_white,
-                              seed_entropy=streams.entropy)
+        return self.stream(rng, dt_white).apply(t, gyro, accel, temperature_c)
 
-    def _sensor(self, s, x, f_true, t, dt, dt_white, T, streams, applied):
+    def stream(self, rng=None, dt_white_s: float | None = None) -> SensorStream:
+        """The model applied to a long record piece by piece, with the same numbers as
+        :meth:`apply` on the whole record.
+
+        Parameters
+        ----------
+        rng : as for :meth:`apply`
+        dt_white_s : float, optional
+            Interval that discretizes the white noise: the median sample interval of the
+            *whole* record (default ``1 / update_rate``).
+
+        Returns
+        -------
+        SensorStream
+            Call its :meth:`SensorStream.apply` with consecutive pieces of the record.
+
+        Examples
+        --------
+        >>> model = SensorModel({"gyroscope_noise_density": 0.01, "gyroscope_random_walk": 1e-3})
+        >>> t = np.arange(1000) / 200.0
+        >>> w, f = np.zeros((1000, 3)), np.tile([0, 0, 9.81], (1000, 1))
+        >>> whole = model.apply(t, w, f, rng=7)
+        >>> st = model.stream(rng=7, dt_white_s=float(np.median(np.diff(t))))
+        >>> parts = [st.apply(t[a:a + 300], w[a:a + 300], f[a:a + 300]) for a in range(0, 1000, 300)]
+        >>> bool(np.array_equal(np.vstack([m.gyro for m in parts]), whole.gyro))
+        True
+        """
+        if dt_white_s is None:
+            dt_white_s = 1.0 / self.config.update_rate if self.config.update_rate else float("nan")
+        return SensorStream(self, rng, float(dt_white_s))
+
+    def _sensor(self, s, x, f_true, t, dt, dt_white, T, streams, applied, state, first):
         cfg = self.config
         p = cfg.sensor(s)
         n = x.shape[0]
@@ -325,22 +335,26 @@ class SensorModel:
         # ---- bias
         bias = np.zeros((n, 3))
         if p["bias"] is not None or p["bias_sigma"] is not None:
-            b0 = np.zeros(3)
-            if p["bias"] is not None:
-                b0 += p["bias"]
-            if p["bias_sigma"] is not None:
-                b0 += p["bias_sigma"] * streams(f"{s}.turn_on_bias").standard_normal(3)
-            bias += b0
+            if first:
+                b0 = np.zeros(3)
+                if p["bias"] is not None:
+                    b0 += p["bias"]
+                if p["bias_sigma"] is not None:
+                    b0 += p["bias_sigma"] * streams(f"{s}.turn_on_bias").standard_normal(3)
+                state["turn_on"] = b0
+            bias += state["turn_on"]
             mark("turn_on_bias")
         if np.any(p["random_walk"] > 0):
-            if n > 1:
-                z = streams(f"{s}.bias_random_walk").standard_normal((n - 1, 3))
-                _k.random_walk_add(z, np.ascontiguousarray(p["random_walk"]), np.sqrt(dt), bias)
+            # the first piece starts the walk at its first sample (N - 1 steps), later pieces
+            # take a step per sample from the previous piece's last one
+            z = streams(f"{s}.bias_random_walk").standard_normal((dt.size, 3))
+            _k.random_walk_add(z, np.ascontiguousarray(p["random_walk"]), np.sqrt(dt), bias, state["walk"])
             mark("bias_random_walk")
         if p["bias_instability"] is not None:
             z = streams(f"{s}.gauss_markov").standard_normal((n, 3))
             _k.gauss_markov_add(z, np.ascontiguousarray(p["bias_instability"]),
-                                np.ascontiguousarray(p["bias_correlation_time"]), dt, bias)
+                                np.ascontiguousarray(p["bias_correlation_time"]), dt, bias,
+                                state["gauss_markov"], first)
             mark("gauss_markov")
         if p["bias_temperature_coefficient"] is not None:
             bias += p["bias_temperature_coefficient"][None, :] * (T - t_ref)[:, None]
@@ -366,3 +380,66 @@ class SensorModel:
             np.clip(meas, -r, r, out=meas)
             mark("saturation")
         return meas, bias
+
+
+def _as_times(t_s):
+    t = np.asarray(t_s, dtype=np.float64)
+    if t.ndim != 1 or t.size == 0:
+        raise InputError(f"Expected `t_s` to have shape (N,) with N >= 1, got {t.shape}")
+    if not np.all(np.isfinite(t)):
+        raise InputError("`t_s` contains NaN or infinite values")
+    return t
+
+
+class SensorStream:
+    """:class:`SensorModel` applied to consecutive pieces of one record (see
+    :meth:`SensorModel.stream`).
+
+    The bias processes carry their state from piece to piece and every noise process draws
+    its numbers in the same order as for the whole record, so the pieces put together are
+    bit-identical to one :meth:`SensorModel.apply` call: long records are processed in
+    bounded memory.
+    """
+
+    def __init__(self, model: SensorModel, rng, dt_white_s: float):
+        self.model = model
+        self.dt_white_s = dt_white_s
+        self._streams = _Streams(rng)
+        self._prev_t = None
+        self._t_first = None
+        self._state = {s: {"walk": np.zeros(3), "gauss_markov": np.zeros(3), "turn_on": None} for s in SENSORS}
+
+    @property
+    def seed_entropy(self):
+        return self._streams.entropy
+
+    def apply(self, t_s, gyro, accel, temperature_c=None) -> ImuMeasurement:
+        """Sensor output for the next piece; arguments as for :meth:`SensorModel.apply`
+        (``t_s`` must continue after the previous piece)."""
+        t = _as_times(t_s)
+        n = t.size
+        g = _as_samples(gyro, n, "gyro")
+        a = _as_samples(accel, n, "accel")
+        first = self._prev_t is None
+        dt = np.diff(t) if first else np.diff(t, prepend=self._prev_t)
+        if np.any(dt <= 0):
+            i = int(np.flatnonzero(dt <= 0)[0]) + (1 if first else 0)
+            before = t[i - 1] if i > 0 else self._prev_t
+            raise InputError(f"`t_s` must be strictly increasing: t_s[{i}] = {t[i]!r} after {before!r}")
+        dt = np.ascontiguousarray(dt)
+        if n > 1 and not math.isfinite(self.dt_white_s):
+            self.dt_white_s = float(np.median(dt))
+        if first:
+            self._t_first = float(t[0])
+        T = self.model._temperature(t, temperature_c, self._t_first)
+        applied: list[str] = []
+        out = {}
+        for s in SENSORS:
+            x = g if s == "gyroscope" else a
+            out[s] = self.model._sensor(s, x, a, t, dt, self.dt_white_s, T, self._streams, applied,
+                                        self._state[s], first)
+        self._prev_t = float(t[-1])
+        return ImuMeasurement(t_s=t, gyro=out["gyroscope"][0], accel=out["accelerometer"][0],
+                              bias_gyro=out["gyroscope"][1], bias_accel=out["accelerometer"][1],
+                              applied=applied, temperature_c=T, dt_white_s=self.dt_white_s,
+                              seed_entropy=self._streams.entropy)
