@@ -81,18 +81,22 @@ class Synthesis:
 MEAN_NODES = 8
 
 
-def _interval_starts(source, t_s):
-    """Start of each sample's interval (t_{k-1}; the first uses the next spacing), clamped to the source."""
+def _interval_starts(source, t_s, prev_s=None):
+    """Start of each sample's interval (t_{k-1}, with ``prev_s`` the sample before ``t_s[0]``;
+    without it the first interval uses the next spacing), clamped to the source."""
     t_s = np.asarray(t_s, dtype=np.float64)
     start = np.empty_like(t_s)
     start[1:] = t_s[:-1]
-    start[0] = t_s[0] - (t_s[1] - t_s[0] if t_s.size > 1 else 0.0)
+    if prev_s is not None:
+        start[0] = prev_s
+    else:
+        start[0] = t_s[0] - (t_s[1] - t_s[0] if t_s.size > 1 else 0.0)
     return np.maximum(start, source.t_min_s)
 
 
-def mean_ideal(source, t_s, gravity, extrinsic):
+def mean_ideal(source, t_s, gravity, extrinsic, prev_s=None):
     """Ideal gyro and specific force averaged over each interval ``[t_{k-1}, t_k]`` (Gauss-Legendre)."""
-    a = _interval_starts(source, t_s)
+    a = _interval_starts(source, t_s, prev_s)
     x, w = np.polynomial.legendre.leggauss(MEAN_NODES)
     h = 0.5 * (t_s - a)
     nodes = (0.5 * (t_s + a))[:, None] + h[:, None] * x[None, :]
@@ -103,12 +107,12 @@ def mean_ideal(source, t_s, gravity, extrinsic):
     return gyro, acc
 
 
-def increments(source, t_s, gravity, extrinsic, ideal_at_stamps):
+def increments(source, t_s, gravity, extrinsic, ideal_at_stamps, prev_s=None):
     """Exact delta-angle ``Log(R_s(t_{k-1})^T R_s(t_k))`` and delta-velocity
     ``R_s(t_{k-1})^T (v_s(t_k) - v_s(t_{k-1}) - g dt)`` of the sensor over each interval."""
     from .lie import quat_xyzw_to_matrix, so3_log
 
-    a = _interval_starts(source, t_s)
+    a = _interval_starts(source, t_s, prev_s)
     prev = ideal_imu(source, a, gravity=gravity, extrinsic=extrinsic)
     R0 = quat_xyzw_to_matrix(prev.quat_xyzw)
     R1 = quat_xyzw_to_matrix(ideal_at_stamps.quat_xyzw)
@@ -116,6 +120,125 @@ def increments(source, t_s, gravity, extrinsic, ideal_at_stamps):
     g = np.asarray(gravity, dtype=np.float64)
     dv_w = ideal_at_stamps.velocity_world - prev.velocity_world - g * (t_s - a)[:, None]
     return dtheta, np.einsum("nji,nj->ni", R0, dv_w), t_s - a
+
+
+#: Samples per piece when a record is synthesized and written piece by piece: the memory in
+#: use stays bounded (a few MB per array) however long the record, and it is reused from
+#: piece to piece instead of being touched fresh.
+CHUNK_SAMPLES = 1 << 16
+
+
+class SynthesisStream:
+    """A synthesis produced piece by piece (:func:`synthesize_stream`).
+
+    Iterating :meth:`pieces` yields :class:`Synthesis` objects for consecutive runs of at most
+    ``chunk_samples`` stamps; put together they are bit-identical to :func:`synthesize` on the
+    whole record (the sensor model carries its state across pieces, see
+    :meth:`splineimu.imu.noise.SensorModel.stream`). :func:`write_output` streams them to disk.
+
+    Attributes
+    ----------
+    t_ns : (N,) int64
+        All stamps.
+    imu_config : ImuConfig or None
+    seed, gravity, extrinsic, sampling, with_increments :
+        As given to :func:`synthesize_stream`.
+    applied : list of str
+        Sensor-model components applied (known once the first piece was made).
+    """
+
+    def __init__(self, source, t_ns, *, gravity, extrinsic, imu_config, seed, temperature_c, sampling,
+                 with_increments, chunk_samples):
+        if sampling not in ("point", "mean"):
+            raise SplineImuError(f"sampling must be 'point' or 'mean', got {sampling!r}")
+        self.source = source
+        self.t_ns = np.asarray(t_ns, dtype=np.int64)
+        self.gravity = tuple(gravity)
+        self.extrinsic = extrinsic
+        self.seed = seed
+        self.sampling = sampling
+        self.with_increments = bool(with_increments)
+        self.chunk_samples = max(1, int(chunk_samples))
+        self.temperature_c = temperature_c
+        self.imu_config = None
+        self._model = None
+        if imu_config is not None:
+            from .imu.config import load_imu_config
+            from .imu.noise import SensorModel
+
+            self.imu_config = load_imu_config(imu_config)
+            self._model = SensorModel(self.imu_config)
+        self.applied: list[str] = []
+
+    def __len__(self) -> int:
+        return int(self.t_ns.size)
+
+    def pieces(self):
+        """Yield the :class:`Synthesis` of each run of at most ``chunk_samples`` stamps, in order."""
+        src = self.source
+        t_all = src.t_s_from_ns(self.t_ns)
+        n = t_all.size
+        stream = None
+        if self._model is not None:
+            if n > 1:
+                dt_white = float(np.median(np.diff(t_all)))
+            else:
+                rate = self._model.config.update_rate
+                dt_white = 1.0 / rate if rate else float("nan")
+            stream = self._model.stream(self.seed, dt_white)
+        temp = self.temperature_c
+        temp_is_series = temp is not None and np.ndim(temp) == 1
+        prev = None
+        for a in range(0, n, self.chunk_samples):
+            b = min(a + self.chunk_samples, n)
+            t_s = t_all[a:b]
+            ideal = ideal_imu(src, t_s, gravity=self.gravity, extrinsic=self.extrinsic)
+            if self.sampling == "mean":
+                gyro0, acc0 = mean_ideal(src, t_s, self.gravity, self.extrinsic, prev)
+            else:
+                gyro0, acc0 = ideal.gyro, ideal.specific_force
+            if stream is None:
+                zeros = np.zeros_like(ideal.gyro)
+                syn = Synthesis(self.t_ns[a:b], gyro0.copy(), acc0.copy(), zeros, zeros.copy(), ideal,
+                                None, self.seed, [], self.gravity, self.extrinsic)
+            else:
+                T = None if temp is None else (np.asarray(temp)[a:b] if temp_is_series else temp)
+                meas = stream.apply(t_s, gyro0, acc0, temperature_c=T)
+                self.applied = list(meas.applied)
+                syn = Synthesis(self.t_ns[a:b], meas.gyro, meas.accel, meas.bias_gyro, meas.bias_accel, ideal,
+                                self.imu_config, self.seed, list(meas.applied), self.gravity, self.extrinsic)
+            syn.sampling = self.sampling
+            if self.with_increments:
+                dth, dv, dt = increments(src, t_s, self.gravity, self.extrinsic, ideal, prev)
+                # sensor errors (bias, noise, scale, ...) integrated over the interval: (measured - true) dt
+                syn.delta_angle = dth + (syn.gyro_rad_s - gyro0) * dt[:, None]
+                syn.delta_velocity = dv + (syn.accel_m_s2 - acc0) * dt[:, None]
+            prev = float(t_s[-1])
+            yield syn
+
+    def collect(self) -> Synthesis:
+        """The whole record as one :class:`Synthesis` (one piece: memory grows with N)."""
+        whole = SynthesisStream(self.source, self.t_ns, gravity=self.gravity, extrinsic=self.extrinsic,
+                                imu_config=self.imu_config, seed=self.seed, temperature_c=self.temperature_c,
+                                sampling=self.sampling, with_increments=self.with_increments,
+                                chunk_samples=max(1, self.t_ns.size))
+        syn = next(whole.pieces())
+        self.applied = whole.applied
+        return syn
+
+
+def synthesize_stream(source: MotionSource, t_ns, *, gravity=DEFAULT_GRAVITY, extrinsic: Extrinsic | None = None,
+                      imu_config=None, seed=None, temperature_c=None, sampling="point",
+                      with_increments=False, chunk_samples: int = CHUNK_SAMPLES) -> SynthesisStream:
+    """:func:`synthesize`, made piece by piece when iterated (bounded memory for long records).
+
+    Parameters are those of :func:`synthesize`, plus ``chunk_samples`` (stamps per piece).
+    Nothing is computed until :meth:`SynthesisStream.pieces` is iterated (or
+    :func:`write_output` writes the stream).
+    """
+    return SynthesisStream(source, t_ns, gravity=gravity, extrinsic=extrinsic, imu_config=imu_config, seed=seed,
+                           temperature_c=temperature_c, sampling=sampling, with_increments=with_increments,
+                           chunk_samples=chunk_samples)
 
 
 def synthesize(source: MotionSource, t_ns, *, gravity=DEFAULT_GRAVITY, extrinsic: Extrinsic | None = None,
@@ -135,6 +258,8 @@ def synthesize(source: MotionSource, t_ns, *, gravity=DEFAULT_GRAVITY, extrinsic
         Sensor model; None gives noise-free data.
     seed : int, optional
         Seed of the sensor model's random streams.
+    temperature_c : float or (N,) array, optional
+        Sensor temperature (overrides the configuration's profile).
     sampling : {"point", "mean"}
         ``"point"``: the instantaneous value at each stamp. ``"mean"``: the average over the
         interval ending at the stamp, ``[t_{k-1}, t_k]``, as an IMU's anti-alias filter /
@@ -142,35 +267,14 @@ def synthesize(source: MotionSource, t_ns, *, gravity=DEFAULT_GRAVITY, extrinsic
     with_increments : bool
         Also compute delta-angle and delta-velocity per interval (exact, coning and sculling
         included), plus the sensor errors integrated over the interval.
-    """
-    if sampling not in ("point", "mean"):
-        raise SplineImuError(f"sampling must be 'point' or 'mean', got {sampling!r}")
-    t_ns = np.asarray(t_ns, dtype=np.int64)
-    t_s = source.t_s_from_ns(t_ns)
-    ideal = ideal_imu(source, t_s, gravity=gravity, extrinsic=extrinsic)
-    if sampling == "mean":
-        gyro0, acc0 = mean_ideal(source, t_s, gravity, extrinsic)
-    else:
-        gyro0, acc0 = ideal.gyro, ideal.specific_force
-    zeros = np.zeros_like(ideal.gyro)
-    if imu_config is None:
-        syn = Synthesis(t_ns, gyro0.copy(), acc0.copy(), zeros, zeros.copy(), ideal,
-                        None, seed, [], tuple(gravity), extrinsic)
-    else:
-        from .imu.config import load_imu_config
-        from .imu.noise import SensorModel
 
-        cfg = load_imu_config(imu_config)
-        meas = SensorModel(cfg).apply(t_s, gyro0, acc0, rng=seed, temperature_c=temperature_c)
-        syn = Synthesis(t_ns, meas.gyro, meas.accel, meas.bias_gyro, meas.bias_accel, ideal, cfg, seed,
-                        list(getattr(meas, "applied", [])), tuple(gravity), extrinsic)
-    syn.sampling = sampling
-    if with_increments:
-        dth, dv, dt = increments(source, t_s, gravity, extrinsic, ideal)
-        # sensor errors (bias, noise, scale, ...) integrated over the interval: (measured - true) dt
-        syn.delta_angle = dth + (syn.gyro_rad_s - gyro0) * dt[:, None]
-        syn.delta_velocity = dv + (syn.accel_m_s2 - acc0) * dt[:, None]
-    return syn
+    See Also
+    --------
+    synthesize_stream : the same, piece by piece.
+    """
+    return synthesize_stream(source, t_ns, gravity=gravity, extrinsic=extrinsic, imu_config=imu_config, seed=seed,
+                             temperature_c=temperature_c, sampling=sampling,
+                             with_increments=with_increments).collect()
 
 
 def _versions():
@@ -181,26 +285,37 @@ def _versions():
             "numba": numba.__version__, "python": platform.python_version()}
 
 
-def write_output(syn: Synthesis, out_dir, *, force=False, report: dict | None = None, bag: str | None = None,
-                 plot: bool = False, fit_data=None):
+def write_output(syn, out_dir, *, force=False, report: dict | None = None, bag: str | None = None,
+                 plot: bool = False, fit_data=None, progress: bool | None = None):
     """Write the EuRoC-like output folder atomically (DESIGN.md section 6).
 
     ``imu0/data.csv``, ``state_groundtruth_estimate0/data.csv`` (sensor pose, velocity and true
     biases), ``groundtruth.tum`` (body poses at the IMU stamps), ``imu.yaml`` (the sensor
     model used), ``report.json``; optionally a ROS bag and PNG plots.
-    """
-    from .io.euroc import write_euroc_groundtruth, write_euroc_imu
-    from .io.output import OutputFolder
-    from .io.tum import write_tum
 
+    ``syn`` is a :class:`Synthesis` or a :class:`SynthesisStream`; a stream is synthesized
+    and written piece by piece, in bounded memory (bags and plots need the whole record and
+    collect it first). ``progress`` shows a progress bar on stderr (default: for long
+    records, when stderr is a terminal).
+    """
+    from .io.euroc import EUROC_GROUNDTRUTH_HEADER, EUROC_IMU_HEADER
+    from .io.output import OutputFolder, TableWriter
+    from .io.tum import TUM_HEADER
+    from .lie import matrix_to_quat_xyzw, quat_make_continuous
+
+    if isinstance(syn, SynthesisStream) and (bag or plot):
+        syn = syn.collect()
+    pieces = syn.pieces() if isinstance(syn, SynthesisStream) else iter([syn])
+    n_total = len(syn) if isinstance(syn, SynthesisStream) else int(syn.t_ns.size)
+    t_all = syn.t_ns
     out_report = dict(report or {})
     out_report.setdefault("versions", _versions())
     out_report["imu"] = {
-        "samples": int(syn.t_ns.size),
-        "first_ns": int(syn.t_ns[0]) if syn.t_ns.size else None,
-        "last_ns": int(syn.t_ns[-1]) if syn.t_ns.size else None,
+        "samples": int(t_all.size),
+        "first_ns": int(t_all[0]) if t_all.size else None,
+        "last_ns": int(t_all[-1]) if t_all.size else None,
         "noise": "noise-free" if syn.imu_config is None else "sensor model (see imu.yaml)",
-        "components_applied": syn.applied,
+        "components_applied": None,
         "seed": syn.seed,
         "gravity_m_s2": list(map(float, syn.gravity)),
         "extrinsic_body_T_sensor": None if syn.extrinsic is None else syn.extrinsic.matrix.tolist(),
@@ -208,28 +323,55 @@ def write_output(syn: Synthesis, out_dir, *, force=False, report: dict | None = 
         "stamp_convention": ("instantaneous value at the stamp" if syn.sampling == "point" else
                              "mean over the interval [previous stamp, stamp] (stamp at the interval's end)"),
     }
+    with_increments = (syn.with_increments if isinstance(syn, SynthesisStream)
+                       else syn.delta_angle is not None)
     with OutputFolder(out_dir, force=force) as tmp:
         (tmp / "imu0").mkdir()
         (tmp / "state_groundtruth_estimate0").mkdir()
-        # (+ 0.0 turns -0.0 into 0.0 in the text)
-        write_euroc_imu(tmp / "imu0" / "data.csv", syn.t_ns, syn.gyro_rad_s + 0.0, syn.accel_m_s2 + 0.0)
-        if syn.delta_angle is not None:
-            from .io.output import atomic_write_bytes, format_table
-
-            head = ("#timestamp [ns] (end of interval),dtheta_x [rad],dtheta_y [rad],dtheta_z [rad],"
-                    "dv_x [m s^-1],dv_y [m s^-1],dv_z [m s^-1]\n")
-            body = format_table(syn.t_ns, np.hstack([syn.delta_angle, syn.delta_velocity]) + 0.0)
-            atomic_write_bytes(tmp / "imu0" / "increments.csv", head.encode() + body)
+        files = [TableWriter(tmp / "imu0" / "data.csv", EUROC_IMU_HEADER),
+                 TableWriter(tmp / "state_groundtruth_estimate0" / "data.csv", EUROC_GROUNDTRUTH_HEADER),
+                 TableWriter(tmp / "groundtruth.tum", TUM_HEADER, sep=" ", stamp="s")]
+        if with_increments:
+            files.append(TableWriter(tmp / "imu0" / "increments.csv",
+                                     "#timestamp [ns] (end of interval),dtheta_x [rad],dtheta_y [rad],"
+                                     "dtheta_z [rad],dv_x [m s^-1],dv_y [m s^-1],dv_z [m s^-1]"))
             out_report["imu"]["increments"] = "imu0/increments.csv (exact delta-angle / delta-velocity " \
                 "over [previous stamp, stamp], sensor frame at the interval start)"
-        write_euroc_groundtruth(tmp / "state_groundtruth_estimate0" / "data.csv", syn.t_ns,
-                                syn.ideal.position_world, syn.ideal.quat_xyzw, syn.ideal.velocity_world,
-                                syn.bias_gyro_rad_s, syn.bias_accel_m_s2)
-        from .lie import matrix_to_quat_xyzw, quat_make_continuous
-
-        body = syn.ideal.body
-        write_tum(tmp / "groundtruth.tum", syn.t_ns, body.position_world,
-                  quat_make_continuous(matrix_to_quat_xyzw(body.world_R_body)))
+        bar = _progress_bar(n_total, progress)
+        last_q = None
+        applied = []
+        try:
+            for piece in pieces:
+                t = piece.t_ns
+                ideal = piece.ideal
+                # (+ 0.0 turns -0.0 into 0.0 in the text)
+                files[0].write(t, np.hstack([piece.gyro_rad_s, piece.accel_m_s2]) + 0.0)
+                q = ideal.quat_xyzw
+                files[1].write(t, np.hstack([ideal.position_world, q[:, [3, 0, 1, 2]], ideal.velocity_world,
+                                             piece.bias_gyro_rad_s, piece.bias_accel_m_s2]))
+                body = ideal.body
+                qb = matrix_to_quat_xyzw(body.world_R_body)
+                if last_q is not None:  # continue the sign choice of the previous piece
+                    qb = quat_make_continuous(np.vstack([last_q, qb]))[1:]
+                else:
+                    qb = quat_make_continuous(qb)
+                last_q = qb[-1:]
+                files[2].write(t, np.hstack([body.position_world, qb]))
+                if with_increments:
+                    files[3].write(t, np.hstack([piece.delta_angle, piece.delta_velocity]) + 0.0)
+                applied = piece.applied
+                if bar is not None:
+                    bar.update(t.size)
+        except BaseException:
+            for f in files:
+                f.abort()
+            raise
+        finally:
+            if bar is not None:
+                bar.close()
+        for f in files:
+            f.close()
+        out_report["imu"]["components_applied"] = list(applied)
         _write_imu_yaml(tmp / "imu.yaml", syn)
         if bag:
             from .io.bag import write_bag
@@ -242,13 +384,26 @@ def write_output(syn: Synthesis, out_dir, *, force=False, report: dict | None = 
             from .plots import plot_fit_residuals, plot_imu
 
             plot_imu(syn, tmp / "imu.png")
-            files = ["imu.png"]
+            plots = ["imu.png"]
             if fit_data is not None:
                 plot_fit_residuals(*fit_data, tmp / "fit_residuals.png")
-                files.append("fit_residuals.png")
-            out_report["plots"] = files
+                plots.append("fit_residuals.png")
+            out_report["plots"] = plots
         (tmp / "report.json").write_text(json.dumps(out_report, indent=2, default=_json_default) + "\n")
     return out_report
+
+
+#: records at least this long get a progress bar (when stderr is a terminal)
+PROGRESS_MIN_SAMPLES = 1_000_000
+
+
+def _progress_bar(n, progress):
+    if progress is False or (progress is None and n < PROGRESS_MIN_SAMPLES):
+        return None
+    from tqdm import tqdm
+
+    return tqdm(total=n, unit=" samples", unit_scale=True, desc="writing", leave=False,
+                disable=None if progress is None else False)
 
 
 def _json_default(o):
@@ -259,7 +414,7 @@ def _json_default(o):
     return str(o)
 
 
-def _write_imu_yaml(path, syn: Synthesis):
+def _write_imu_yaml(path, syn):
     if syn.imu_config is not None:
         syn.imu_config.to_yaml(path)
         return

@@ -121,7 +121,7 @@ def run_from_poses(args, read) -> int:
 
 def _one(args, track, out_dir, order, knot, gaps, max_gap, force=False, quiet=False):
     from ..errors import InputError
-    from ..pipeline import synthesize, uniform_stamps_ns, write_output
+    from ..pipeline import synthesize_stream, uniform_stamps_ns, write_output
     from ..spline.fit import DEFAULT_SMOOTHNESS, fit
     from ._common import load_extrinsic, say, seed_or_default
 
@@ -154,9 +154,9 @@ def _one(args, track, out_dir, order, knot, gaps, max_gap, force=False, quiet=Fa
     else:
         t_ns = uniform_stamps_ns(int(track.t_ns[0]), int(track.t_ns[-1]), args.rate)
     seed = seed_or_default(args.seed) if args.imu else args.seed
-    syn = synthesize(spl, t_ns, gravity=tuple(args.gravity), extrinsic=load_extrinsic(args.extrinsic),
-                     imu_config=args.imu, seed=seed,
-                     sampling=args.sampling, with_increments=args.increments)
+    syn = synthesize_stream(spl, t_ns, gravity=tuple(args.gravity), extrinsic=load_extrinsic(args.extrinsic),
+                            imu_config=args.imu, seed=seed, sampling=args.sampling,
+                            with_increments=args.increments)
     report = {
         "source": {"kind": "pose file", "path": str(args.poses), "poses": int(n_poses),
                    "first_ns": int(track.t_ns[0]), "last_ns": int(track.t_ns[-1]), "notices": list(track.notices)},

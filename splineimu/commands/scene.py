@@ -48,7 +48,7 @@ def run(args) -> int:
 
     from .. import scenes
     from ..errors import ConfigError
-    from ..pipeline import synthesize, uniform_stamps_ns, write_output
+    from ..pipeline import synthesize_stream, uniform_stamps_ns, write_output
     from ._common import fail_fast_output, load_extrinsic, say, seed_or_default, summary
 
     if args.list:
@@ -73,9 +73,9 @@ def run(args) -> int:
         return 0
     t_ns = uniform_stamps_ns(scene.origin_ns, scene.origin_ns + int(round(scene.t_max_s * 1e9)), args.rate)
     seed = seed_or_default(args.seed) if args.imu else args.seed
-    syn = synthesize(scene, t_ns, gravity=tuple(args.gravity), extrinsic=load_extrinsic(args.extrinsic),
-                     imu_config=args.imu, seed=seed,
-                     sampling=args.sampling, with_increments=args.increments)
+    syn = synthesize_stream(scene, t_ns, gravity=tuple(args.gravity), extrinsic=load_extrinsic(args.extrinsic),
+                            imu_config=args.imu, seed=seed, sampling=args.sampling,
+                            with_increments=args.increments)
     report = {"source": {"kind": "analytic scene", **scene.describe()}, "rate_hz": args.rate}
     rep = write_output(syn, args.out, force=args.force, report=report, bag=args.bag, plot=args.plot)
     say(f"scene         {args.name}, {scene.t_max_s:g} s")
