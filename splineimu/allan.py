@@ -16,7 +16,7 @@ For samples ``y_i`` (i = 0..N-1) at rate ``1/tau0``, the "phase" is the integral
 using all ``N + 1 - 2m`` overlapping second differences (:attr:`AllanResult.n_clusters`).
 Each tau costs one O(N) pass over the cumulative sum; the kernel
 (:func:`splineimu._kernels.allan.oadev_sums`) fuses the pass and runs over (tau, axis) pairs
-in parallel.
+in parallel threads.
 
 Noise model of an IMU axis (IEEE Std 952-1997, annex C)::
 
@@ -59,6 +59,7 @@ Variance", IEEE TIM 57(1), 2008.
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -74,8 +75,8 @@ __all__ = [
 #: Height of the flicker (bias-instability) floor in units of B: sqrt(2 ln 2 / pi) = 0.6643.
 FLICKER_FLOOR = math.sqrt(2.0 * math.log(2.0) / math.pi)
 
-#: Below this many second differences in total, the serial kernel is used (starting the
-#: thread pool costs more than it saves; benchmarks/bench_allan.py).
+#: Below this many second differences in total, one thread is used (starting threads costs
+#: more than it saves; benchmarks/bench_allan.py).
 PARALLEL_MIN_WORK = 5e6
 
 #: Power-law exponents alpha (PSD of the rate ~ f^alpha) by name.
@@ -161,12 +162,41 @@ def edf_oadev(n_phase, m, alpha):
     return np.maximum(out, 1e-3)
 
 
+def _chi2_ppf(q, nu):
+    """Quantile ``q`` of chi2(nu) (``scipy.stats.chi2.ppf``; through ``scipy.special``, whose
+    import costs a third of ``scipy.stats``'s: 0.17 s against 0.56 s, measured)."""
+    from scipy.special import chdtri
+
+    return chdtri(nu, 1.0 - q)
+
+
+def _nnls(A, b):
+    """Non-negative least squares ``min |A x - b|, x >= 0`` for a few columns, exactly: the
+    optimum is the unconstrained solution on its support, so every support is tried (2^3
+    for the noise model) and the best feasible one kept. (``scipy.optimize.nnls`` gives the
+    same; importing ``scipy.optimize`` costs 0.34 s, measured.)"""
+    n = A.shape[1]
+    best_x = np.zeros(n)
+    best_r = float(b @ b)
+    live = [j for j in range(n) if np.any(A[:, j] != 0.0)]
+    for mask in range(1, 1 << len(live)):
+        cols = [live[i] for i in range(len(live)) if mask >> i & 1]
+        xs = np.linalg.lstsq(A[:, cols], b, rcond=None)[0]
+        if np.any(xs < 0.0):
+            continue
+        r = b - A[:, cols] @ xs
+        rr = float(r @ r)
+        if rr < best_r:
+            best_r = rr
+            best_x = np.zeros(n)
+            best_x[cols] = xs
+    return best_x
+
+
 def _chi2_interval_factors(edf):
     """Return ``(lo, hi)`` with ``var * lo <= true var <= var * hi`` at 95 % for chi2(edf)."""
-    from scipy.stats import chi2
-
     edf = np.asarray(edf, dtype=np.float64)
-    return edf / chi2.ppf(0.975, edf), edf / chi2.ppf(0.025, edf)
+    return edf / _chi2_ppf(0.975, edf), edf / _chi2_ppf(0.025, edf)
 
 
 def _alpha_from_slope(slope):
@@ -336,7 +366,7 @@ def _cluster_factors_from_taus(taus, rate_hz, n):
 
 
 def allan_deviation(data, rate_hz: float, taus=None, *, points_per_decade: float = 10.0,
-                    labels=None) -> AllanResult:
+                    labels=None, threads: int | None = None) -> AllanResult:
     """Overlapping Allan deviation of one or more evenly sampled signals.
 
     Parameters
@@ -354,6 +384,8 @@ def allan_deviation(data, rate_hz: float, taus=None, *, points_per_decade: float
         Density of the default cluster times.
     labels : list of str, optional
         Column names (default ``"0", "1", ...``).
+    threads : int, optional
+        Threads for long records (default: the number of CPUs, at most 8).
 
     Returns
     -------
@@ -407,10 +439,17 @@ def allan_deviation(data, rate_hz: float, taus=None, *, points_per_decade: float
     _k.freq_to_phase_into(y, np.ascontiguousarray(y.mean(axis=0)), 1.0 / rate_hz, phase)
     sums = np.empty((m.size, K))
     work = float(np.sum(n + 1 - 2 * m)) * K
-    if work >= PARALLEL_MIN_WORK:
-        _k.oadev_sums(phase, m, sums)
+    if threads is None:
+        threads = os.cpu_count() or 1
+    threads = max(1, min(int(threads), 8, K * m.size)) if work >= PARALLEL_MIN_WORK else 1
+    if threads > 1:
+        from concurrent.futures import ThreadPoolExecutor
+
+        with ThreadPoolExecutor(max_workers=threads) as pool:
+            for f in [pool.submit(_k.oadev_sums, phase, m, sums, i, threads) for i in range(threads)]:
+                f.result()
     else:
-        _k.oadev_sums_serial(phase, m, sums)
+        _k.oadev_sums(phase, m, sums, 0, 1)
     del phase
     n_clusters = (n + 1 - 2 * m).astype(np.int64)
     adev = np.sqrt(sums / (2.0 * n_clusters[:, None])) / m[:, None] * rate_hz
@@ -435,8 +474,6 @@ def _wls_model(taus, s2, edf_of_alpha, flat=True, n_iter=12):
     The weight of a point is ``edf / (2 model^2)`` (the variance of a chi-square estimate),
     recomputed from the current model, with the EDF of the term that dominates there.
     """
-    from scipy.optimize import nnls
-
     A = np.column_stack([1.0 / taus, np.ones_like(taus) if flat else np.zeros_like(taus), taus / 3.0])
     model = s2.copy()
     x = np.zeros(3)
@@ -451,7 +488,7 @@ def _wls_model(taus, s2, edf_of_alpha, flat=True, n_iter=12):
         Aw = A * w[:, None]
         scale = np.linalg.norm(Aw, axis=0)
         scale[scale == 0] = 1.0
-        xs, _ = nnls(Aw / scale, s2 * w)
+        xs = _nnls(Aw / scale, s2 * w)
         x_new = xs / scale
         new_model = A @ x_new
         if np.all(new_model > 0):
@@ -465,7 +502,7 @@ def _wls_model(taus, s2, edf_of_alpha, flat=True, n_iter=12):
     return x, A
 
 
-def _combine(s2, other, g, nu, frac, chi2):
+def _combine(s2, other, g, nu, frac):
     """Combine per-point estimates of one coefficient ``p`` of the model ``s2 = other + p g``.
 
     Point j gives ``p_j = (s2_j - other_j) / g_j`` (the other model terms subtracted); its
@@ -481,8 +518,8 @@ def _combine(s2, other, g, nu, frac, chi2):
     w = 1.0 / r**2
     w /= w.sum()
     est = float(w @ ((s2 - other) / g))
-    lo = float(w @ ((s2 * nu / chi2.ppf(0.975, nu) - other) / g))
-    hi = float(w @ ((s2 * nu / chi2.ppf(0.025, nu) - other) / g))
+    lo = float(w @ ((s2 * nu / _chi2_ppf(0.975, nu) - other) / g))
+    hi = float(w @ ((s2 * nu / _chi2_ppf(0.025, nu) - other) / g))
     return max(est, 0.0), max(lo, 0.0), max(hi, 0.0)
 
 
@@ -553,8 +590,6 @@ def fit_noise_parameters(result: AllanResult, *, min_white_tau_s: float | None =
     rate = result.rate_hz
     if min_white_tau_s is None:
         min_white_tau_s = 10.0 / rate
-    from scipy.stats import chi2
-
     def edf_of_alpha(alpha):
         return edf_oadev(n_phase, result.m, alpha)
 
@@ -598,7 +633,7 @@ def fit_noise_parameters(result: AllanResult, *, min_white_tau_s: float | None =
             sel = np.zeros(T, dtype=bool)
             sel[0] = True
         est, lo, hi = _combine(s2[sel], terms[sel, 1] + terms[sel, 2], 1.0 / taus[sel], nu_white[sel],
-                               frac[sel, 0], chi2)
+                               frac[sel, 0])
         out["white_noise_density"][k] = math.sqrt(est)
         out["white_noise_density_ci95"][k] = (math.sqrt(lo), math.sqrt(hi))
         out["white_fit_tau_range_s"][k] = (taus[sel].min(), taus[sel].max())
@@ -608,7 +643,7 @@ def fit_noise_parameters(result: AllanResult, *, min_white_tau_s: float | None =
         est = lo = hi = 0.0
         if sel.any():
             est, lo, hi = _combine(s2[sel], terms[sel, 0] + terms[sel, 1], taus[sel] / 3.0, nu_rw[sel],
-                                   frac[sel, 2], chi2)
+                                   frac[sel, 2])
             out["random_walk_fit_tau_range_s"][k] = (taus[sel].min(), taus[sel].max())
         if lo > 0.0:
             out["random_walk"][k] = math.sqrt(est)
@@ -619,7 +654,7 @@ def fit_noise_parameters(result: AllanResult, *, min_white_tau_s: float | None =
             # all of a point's variance to the random walk, at the point (chosen on the model)
             # where that bound is tightest.
             if not sel.any():
-                q_lo = chi2.ppf(0.025, nu_rw)
+                q_lo = _chi2_ppf(0.025, nu_rw)
                 j = int(np.argmin(3.0 * model * nu_rw / (q_lo * taus)))
                 hi = 3.0 * s2[j] * nu_rw[j] / (q_lo[j] * taus[j])
             out["random_walk"][k] = math.sqrt(hi)

@@ -330,3 +330,26 @@ def test_imu_noise_dict_needs_six_axes():
     r = allan_deviation(np.random.default_rng(0).standard_normal((1000, 2)), 100.0)
     with pytest.raises(InputError, match="six-axis"):
         imu_noise_dict(r, fit_noise_parameters(r))
+
+
+def test_small_nnls_and_chi2_quantiles_match_scipy():
+    """The import-light replacements used by the noise fit agree with scipy's own."""
+    from scipy.optimize import nnls
+    from scipy.stats import chi2
+
+    from splineimu.allan import _chi2_ppf, _nnls
+
+    rng = np.random.default_rng(3)
+    for _ in range(200):
+        A = rng.uniform(0.0, 1.0, (40, 3)) * 10.0 ** rng.uniform(-3, 3, 3)
+        if rng.uniform() < 0.2:
+            A[:, 1] = 0.0  # the model without a flat term
+        b = A @ (rng.uniform(-1.0, 1.0, 3) * 10.0 ** -rng.uniform(-3, 3, 3)) + rng.normal(0.0, 0.1, 40)
+        ref, _ = nnls(A, b)
+        x = _nnls(A, b)
+        assert np.all(x >= 0.0)
+        assert np.linalg.norm(A @ x - b) <= np.linalg.norm(A @ ref - b) * (1 + 1e-12) + 1e-14
+        np.testing.assert_allclose(x, ref, rtol=1e-8, atol=1e-12 * np.abs(ref).max())
+    nu = np.array([0.3, 1.0, 2.5, 17.0, 1e3, 1e6])
+    for q in (0.025, 0.975):
+        np.testing.assert_allclose(_chi2_ppf(q, nu), chi2.ppf(q, nu), rtol=1e-12)

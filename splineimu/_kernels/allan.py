@@ -6,7 +6,7 @@ preallocated and come last.
 
 from __future__ import annotations
 
-from .._jit import jit, prange
+from .._jit import jit
 
 
 @jit
@@ -60,18 +60,20 @@ def oadev_sum_one(x, mj):
     return (s0 + s1) + (s2 + s3)
 
 
-@jit(parallel=True)
-def oadev_sums(phase, m, out):
-    """``out[j, k] = oadev_sum_one(phase[k], m[j])`` for all (tau, column) pairs, in parallel.
+@jit(nogil=True)
+def oadev_sums(phase, m, out, first, step):
+    """``out[j, k] = oadev_sum_one(phase[k], m[j])`` for the (tau, column) pairs
+    ``p = first, first + step, ...`` of the list that alternates the smallest and largest
+    remaining ``m`` (so that ``step`` threads starting at ``first = 0 .. step - 1`` get equal
+    work). ``phase`` is (K, L), ``m`` (T,) int64 with ``2 m_j < L``, ``out`` (T, K).
 
-    ``phase`` is (K, L), ``m`` (T,) int64 averaging factors with ``2 m_j < L``, ``out`` (T, K).
-    The parallel loop runs over (tau, column) pairs, ordered so that the long (small-m) sums
-    are spread over both halves of the range (numba splits the range in contiguous chunks).
+    Releases the GIL: plain Python threads run it in parallel without the first-call cost of
+    numba's parallel backend (~0.5 s per process, measured), which dominated one-shot runs.
     """
     nt = m.shape[0]
     kk = phase.shape[0]
     total = nt * kk
-    for p in prange(total):
+    for p in range(first, total, step):
         q = p // kk
         k = p - q * kk
         # interleave: q = 0 -> smallest m, q = 1 -> largest m, ... balances the work
@@ -80,11 +82,3 @@ def oadev_sums(phase, m, out):
         else:
             j = nt - 1 - q // 2
         out[j, k] = oadev_sum_one(phase[k], m[j])
-
-
-@jit
-def oadev_sums_serial(phase, m, out):
-    """Serial :func:`oadev_sums` (no thread start-up: faster for small inputs)."""
-    for j in range(m.shape[0]):
-        for k in range(phase.shape[0]):
-            out[j, k] = oadev_sum_one(phase[k], m[j])

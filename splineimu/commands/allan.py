@@ -53,12 +53,12 @@ def load_recording(path, fmt=None, rate_hz=None, gyro_unit=None, accel_unit=None
 
     Returns
     -------
-    (gyro_rad_s (N, 3), accel_m_s2 (N, 3), rate_hz, notes: list of str)
+    (data (N, 6): gyro [rad/s] then accel [m/s^2] columns, rate_hz, notes: list of str)
     """
     import numpy as np
 
     from ..errors import ConfigError
-    from ..io.imu_csv import ACCEL_UNITS, GYRO_UNITS, read_imu_csv, read_static_rda, unit_factor
+    from ..io.imu_csv import ACCEL_UNITS, GYRO_UNITS, read_imu_table, read_static_rda, unit_factor
 
     path = Path(path)
     if fmt is None:
@@ -72,12 +72,12 @@ def load_recording(path, fmt=None, rate_hz=None, gyro_unit=None, accel_unit=None
                                          accel_unit=accel_unit or "g")
         notes.append(f"no stamps in an .rda file: {rate:g} Hz assumed; units gyro {gyro_unit or 'deg/s'}, "
                      f"accel {accel_unit or 'g'}")
-        return gyro, accel, rate, notes
-    t_ns, gyro, accel = read_imu_csv(path)
+        return np.hstack([gyro, accel]), rate, notes
+    t_ns, data = read_imu_table(path)
     if gyro_unit:
-        gyro = gyro * unit_factor(gyro_unit, GYRO_UNITS, "gyro")
+        data[:, :3] *= unit_factor(gyro_unit, GYRO_UNITS, "gyro")
     if accel_unit:
-        accel = accel * unit_factor(accel_unit, ACCEL_UNITS, "accelerometer")
+        data[:, 3:] *= unit_factor(accel_unit, ACCEL_UNITS, "accelerometer")
     if t_ns.size < 3:
         raise ConfigError(f"{path}: need at least 3 samples for an Allan deviation, got {t_ns.size}")
     d = np.diff(t_ns)
@@ -87,7 +87,7 @@ def load_recording(path, fmt=None, rate_hz=None, gyro_unit=None, accel_unit=None
     if gaps:
         notes.append(f"{gaps} gap(s) longer than 1.5 sample intervals (longest {d.max() / 1e9:.3g} s): "
                      "the Allan deviation assumes even sampling")
-    return gyro, accel, rate, notes
+    return data, rate, notes
 
 
 def _fmt_ci(v, ci, mark=""):
@@ -128,7 +128,6 @@ def format_table(result, fit, source="") -> str:
 
 
 def run(args) -> int:
-    import numpy as np
 
     from ..allan import allan_deviation, fit_noise_parameters, imu_noise_dict, plot_allan
     from ..errors import ConfigError, OutputExistsError
@@ -146,11 +145,11 @@ def run(args) -> int:
         if existing and not args.force:
             raise OutputExistsError(f"{', '.join(existing)} exist(s); use --force to overwrite")
 
-    gyro, accel, rate, notes = load_recording(args.input, args.format, args.rate, args.gyro_unit,
+    data, rate, notes = load_recording(args.input, args.format, args.rate, args.gyro_unit,
                                               args.accel_unit)
     for note in notes:
         print(f"note: {note}", file=sys.stderr)
-    result = allan_deviation(np.hstack([gyro, accel]), rate, points_per_decade=args.points_per_decade,
+    result = allan_deviation(data, rate, points_per_decade=args.points_per_decade,
                              labels=_LABELS)
     fit = fit_noise_parameters(result)
     print(format_table(result, fit, source=str(args.input)))
