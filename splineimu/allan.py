@@ -747,8 +747,6 @@ def plot_allan(result: AllanResult, fit: NoiseFit | None, path, title: str = "")
     Six columns are drawn as two panels (gyro, accelerometer); other counts in one panel.
     Uses matplotlib's Agg backend (imported here).
     """
-    import os
-    import tempfile
     from pathlib import Path
 
     import matplotlib
@@ -809,17 +807,13 @@ def plot_allan(result: AllanResult, fit: NoiseFit | None, path, title: str = "")
     if title:
         fig.suptitle(title, fontsize=10)
     fig.tight_layout()
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix="." + path.name + ".", suffix=".png", dir=path.parent)
-    os.close(fd)
+    import io
+
+    from .io.output import atomic_write_bytes
+
+    buf = io.BytesIO()
     try:
-        fig.savefig(tmp, format="png", dpi=110)
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
+        fig.savefig(buf, format="png", dpi=110)
     finally:
         plt.close(fig)
+    atomic_write_bytes(Path(path), buf.getbuffer())

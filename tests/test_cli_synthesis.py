@@ -255,3 +255,22 @@ def test_streamed_output_equals_the_whole_record_byte_for_byte(tmp_path, samplin
             assert a["imu"] == b["imu"]
             continue
         assert (tmp_path / "whole" / name).read_bytes() == (tmp_path / "pieces" / name).read_bytes(), name
+
+
+def test_output_files_get_the_usual_permissions(tmp_path):
+    """Every file of an output folder (and allan's) is created with mode 0666 & ~umask, as
+    any other tool's output: temporary-file helpers default to 0600, which hid them from
+    other users and containers."""
+    import os
+
+    old = os.umask(0o022)
+    try:
+        assert main(["scene", "static", "--duration", "2", "-o", str(tmp_path / "out"), "--imu", "adis16448"]) == 0
+        assert main(["allan", str(tmp_path / "out" / "imu0" / "data.csv"), "-o", str(tmp_path / "al"),
+                     "--plot"]) == 0
+    finally:
+        os.umask(old)
+    files = [p for p in tmp_path.rglob("*") if p.is_file()]
+    assert len(files) == 7
+    for p in files:
+        assert p.stat().st_mode & 0o777 == 0o644, p

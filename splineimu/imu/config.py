@@ -97,7 +97,6 @@ import difflib
 import math
 import os
 import re
-import tempfile
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -641,20 +640,9 @@ def write_yaml_atomic(path, data: dict, comment_lines=()) -> Path:
     body = yaml.dump(data, Dumper=_Dumper, sort_keys=False, default_flow_style=False, width=110)
     text = "".join(c + "\n" for c in comment_lines) + body
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix="." + path.name + ".", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
-    return path
+    from ..io.output import atomic_write_text
+
+    return atomic_write_text(path, text)  # (mode 0666 & ~umask, like any other output file)
 
 
 # ------------------------------------------------------------------------------ presets
