@@ -24,7 +24,7 @@ def _run(args, timeout):
 
 
 def test_core_suites_without_jit():
-    _run(["tests/test_lie.py", "tests/test_spline.py", "tests/test_scenes.py",
+    _run(["tests/test_lie.py", "tests/test_spline.py", "tests/test_spline_imu_kernel.py", "tests/test_scenes.py",
           "tests/test_fit.py::test_rotation_gradient_matches_finite_differences",
           "tests/test_fit.py::test_se3_gradient_matches_finite_differences"], timeout=900)
 
