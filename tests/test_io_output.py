@@ -207,3 +207,28 @@ def test_format_table_lossless_across_magnitudes():
 @given(st.floats(allow_nan=False, allow_infinity=False, min_value=-8.9e18, max_value=8.9e18))
 def test_format_table_lossless_hypothesis(x):
     _check_values([x])
+
+
+def test_table_writer_works_in_a_forked_child(tmp_path):
+    """Monte-Carlo runs fork workers after the parent has written outputs: the child must not
+    wait on the parent's formatting threads (which it does not have)."""
+    import multiprocessing as mp
+
+    from splineimu.io.output import CHUNK_ROWS, TableWriter
+
+    t = np.arange(3 * CHUNK_ROWS, dtype=np.int64)
+    v = np.random.default_rng(0).normal(size=(t.size, 2))
+    with TableWriter(tmp_path / "parent.csv") as w:  # starts the pool in this process
+        w.write(t, v)
+    ctx = mp.get_context("fork")
+    with ctx.Pool(1) as pool:
+        res = pool.apply_async(_write_in_child, (str(tmp_path / "child.csv"), t, v))
+        res.get(timeout=30)
+    assert (tmp_path / "child.csv").read_bytes() == (tmp_path / "parent.csv").read_bytes()
+
+
+def _write_in_child(path, t, v):
+    from splineimu.io.output import TableWriter
+
+    with TableWriter(path) as w:
+        w.write(t, v)

@@ -707,6 +707,17 @@ _POOL_LOCK = threading.Lock()
 _SCRATCH = threading.local()
 
 
+def _forget_pool():
+    # a forked child has none of the parent's threads: it starts its own pool when it needs one
+    global _POOL, _POOL_LOCK
+    _POOL = None
+    _POOL_LOCK = threading.Lock()
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_forget_pool)
+
+
 def _pool():
     """The formatting threads (the number of CPUs, at most 4), started on first use."""
     global _POOL
