@@ -143,8 +143,6 @@ class SynthesisStream:
     imu_config : ImuConfig or None
     seed, gravity, extrinsic, sampling, with_increments :
         As given to :func:`synthesize_stream`.
-    applied : list of str
-        Sensor-model components applied (known once the first piece was made).
     """
 
     def __init__(self, source, t_ns, *, gravity, extrinsic, imu_config, seed, temperature_c, sampling,
@@ -168,7 +166,6 @@ class SynthesisStream:
 
             self.imu_config = load_imu_config(imu_config)
             self._model = SensorModel(self.imu_config)
-        self.applied: list[str] = []
 
     def __len__(self) -> int:
         return int(self.t_ns.size)
@@ -180,12 +177,7 @@ class SynthesisStream:
         n = t_all.size
         stream = None
         if self._model is not None:
-            if n > 1:
-                dt_white = float(np.median(np.diff(t_all)))
-            else:
-                rate = self._model.config.update_rate
-                dt_white = 1.0 / rate if rate else float("nan")
-            stream = self._model.stream(self.seed, dt_white)
+            stream = self._model.stream(self.seed, self._model.white_noise_interval(t_all))
         temp = self.temperature_c
         temp_is_series = temp is not None and np.ndim(temp) == 1
         prev = None
@@ -204,7 +196,6 @@ class SynthesisStream:
             else:
                 T = None if temp is None else (np.asarray(temp)[a:b] if temp_is_series else temp)
                 meas = stream.apply(t_s, gyro0, acc0, temperature_c=T)
-                self.applied = list(meas.applied)
                 syn = Synthesis(self.t_ns[a:b], meas.gyro, meas.accel, meas.bias_gyro, meas.bias_accel, ideal,
                                 self.imu_config, self.seed, list(meas.applied), self.gravity, self.extrinsic)
             syn.sampling = self.sampling
@@ -222,9 +213,7 @@ class SynthesisStream:
                                 imu_config=self.imu_config, seed=self.seed, temperature_c=self.temperature_c,
                                 sampling=self.sampling, with_increments=self.with_increments,
                                 chunk_samples=max(1, self.t_ns.size))
-        syn = next(whole.pieces())
-        self.applied = whole.applied
-        return syn
+        return next(whole.pieces())
 
 
 def synthesize_stream(source: MotionSource, t_ns, *, gravity=DEFAULT_GRAVITY, extrinsic: Extrinsic | None = None,
@@ -350,7 +339,9 @@ def write_output(syn, out_dir, *, force=False, report: dict | None = None, bag: 
                 files[1].write(t, np.hstack([ideal.position_world, q[:, [3, 0, 1, 2]], ideal.velocity_world,
                                              piece.bias_gyro_rad_s, piece.bias_accel_m_s2]))
                 body = ideal.body
-                qb = matrix_to_quat_xyzw(body.world_R_body)
+                # with the sensor at the body origin, ideal_imu already converted this rotation
+                same_frame = syn.extrinsic is None or syn.extrinsic.is_identity
+                qb = ideal.quat_xyzw if same_frame else matrix_to_quat_xyzw(body.world_R_body)
                 if last_q is not None:  # continue the sign choice of the previous piece
                     qb = quat_make_continuous(np.vstack([last_q, qb]))[1:]
                 else:

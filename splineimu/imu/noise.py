@@ -257,14 +257,15 @@ class SensorModel:
             noise but no ``update_rate``; a bad ``rng``.
         """
         t = _as_times(t_s)
-        dt = np.diff(t)
+        return self.stream(rng, self.white_noise_interval(t)).apply(t, gyro, accel, temperature_c)
+
+    def white_noise_interval(self, t_s) -> float:
+        """The interval that discretizes the white noise of a record sampled at ``t_s``: the
+        median sample interval, or ``1 / update_rate`` for a single sample (NaN without one)."""
+        t = np.asarray(t_s, dtype=np.float64)
         if t.size > 1:
-            dt_white = float(np.median(dt))
-        elif self.config.update_rate is not None:
-            dt_white = 1.0 / self.config.update_rate
-        else:
-            dt_white = float("nan")
-        return self.stream(rng, dt_white).apply(t, gyro, accel, temperature_c)
+            return float(np.median(np.diff(t)))
+        return 1.0 / self.config.update_rate if self.config.update_rate else float("nan")
 
     def stream(self, rng=None, dt_white_s: float | None = None) -> SensorStream:
         """The model applied to a long record piece by piece, with the same numbers as
