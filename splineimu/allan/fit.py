@@ -241,6 +241,7 @@ def fit_noise_parameters(result: AllanResult, *, min_white_tau_s: float | None =
 
     Examples
     --------
+    >>> from splineimu.allan import allan_deviation
     >>> rng = np.random.default_rng(1)
     >>> y = 0.01 * np.sqrt(100.0) * rng.standard_normal(200_000)  # N = 0.01 at 100 Hz
     >>> f = fit_noise_parameters(allan_deviation(y, 100.0))

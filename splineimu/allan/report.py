@@ -95,7 +95,7 @@ def format_table(result: AllanResult, fit: NoiseFit, source: str = "") -> str:
     --------
     >>> from splineimu.allan import allan_deviation, fit_noise_parameters
     >>> r = allan_deviation(np.random.default_rng(0).standard_normal(20_000), 100.0, labels=["x"])
-    >>> print(format_table(r, fit_noise_parameters(r)).splitlines()[1])
+    >>> print(format_table(r, fit_noise_parameters(r)).splitlines()[0])
       20000 samples at 100 Hz (200.0 s); 35 cluster times 0.01 s .. 50 s
     """
     lines = []
