@@ -374,7 +374,8 @@ def compare_files(est_path, ref_path, *, plot=None, **options) -> CompareResult:
 
     Raises
     ------
-    As :func:`compare`.
+    SplineImuError, InputError, ConfigError
+        As :func:`compare`.
 
     Examples
     --------
@@ -383,7 +384,7 @@ def compare_files(est_path, ref_path, *, plot=None, **options) -> CompareResult:
     >>> _ = (d / "ref.tum").write_text("".join(f"{i}.0 {i} 0 0 0 0 0 1\\n" for i in range(5)))
     >>> _ = (d / "est.tum").write_text("".join(f"{i}.0 {i} 0.5 0 0 0 0 1\\n" for i in range(5)))
     >>> r = compare_files(d / "est.tum", d / "ref.tum", metric="both")
-    >>> round(r.ape.stats["max"], 6), r.to_dataframe()["metric"].tolist()
+    >>> round(float(r.ape.stats["max"]), 6), r.to_dataframe()["metric"].tolist()
     (0.5, ['ape', 'rpe'])
     """
     res = compare(Path(est_path), Path(ref_path), **options)
