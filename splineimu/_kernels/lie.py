@@ -29,18 +29,29 @@ JAC_SMALL_ANGLE = 1e-1
 SE3_Q_SMALL_ANGLE = 0.5
 
 
-@jit
-def so3_exp_into(x, y, z, R):
-    """R = Exp([x, y, z]) (Rodrigues, with a Taylor branch near 0)."""
-    t2 = x * x + y * y + z * z
+@jit(inline="always")
+def so3_exp_coeffs(t2):
+    """The coefficients of Exp for t^2 = t2: (sin t/t, (1 - cos t)/t^2) of the matrix
+    I + a K + b K^2 and (cos(t/2), sin(t/2)/t) of the quaternion. Below EXP_SMALL_ANGLE all by
+    their series to t^4 (error < t^6 / 5040)."""
     if t2 < EXP_SMALL_ANGLE * EXP_SMALL_ANGLE:
         a = 1.0 - t2 / 6.0 + t2 * t2 / 120.0
         b = 0.5 - t2 / 24.0 + t2 * t2 / 720.0
+        c = 1.0 - t2 / 8.0 + t2 * t2 / 384.0
+        s = 0.5 - t2 / 48.0 + t2 * t2 / 3840.0
     else:
         t = math.sqrt(t2)
         a = math.sin(t) / t
         s = math.sin(0.5 * t) / t
         b = 2.0 * s * s
+        c = math.cos(0.5 * t)
+    return a, b, c, s
+
+
+@jit
+def so3_exp_into(x, y, z, R):
+    """R = Exp([x, y, z]) = I + a K + b K^2 (Rodrigues; coefficients from so3_exp_coeffs)."""
+    a, b, _, _ = so3_exp_coeffs(x * x + y * y + z * z)
     xx = x * x
     yy = y * y
     zz = z * z
@@ -112,16 +123,8 @@ def quat_wxyz_mul_into(a, b, q):
 
 @jit
 def so3_exp_quat_wxyz_into(x, y, z, q):
-    """q = Exp([x, y, z]) as a unit quaternion: (cos(t/2), sin(t/2)/t [x, y, z]); below
-    EXP_SMALL_ANGLE both coefficients by their series to t^4 (error ~ t^6 / 46080)."""
-    t2 = x * x + y * y + z * z
-    if t2 < EXP_SMALL_ANGLE * EXP_SMALL_ANGLE:
-        c = 1.0 - t2 / 8.0 + t2 * t2 / 384.0
-        s = 0.5 - t2 / 48.0 + t2 * t2 / 3840.0
-    else:
-        t = math.sqrt(t2)
-        c = math.cos(0.5 * t)
-        s = math.sin(0.5 * t) / t
+    """q = Exp([x, y, z]) as a unit quaternion: (cos(t/2), sin(t/2)/t [x, y, z])."""
+    _, _, c, s = so3_exp_coeffs(x * x + y * y + z * z)
     q[0] = c
     q[1] = s * x
     q[2] = s * y
