@@ -102,7 +102,7 @@ def mat_to_quat_wxyz_into(R, q):
     quat_wxyz_normalize_into(w, x, y, z, q)
 
 
-@jit
+@jit(inline="always")
 def quat_wxyz_normalize_into(w, x, y, z, q):
     """q = (w, x, y, z) / |(w, x, y, z)|."""
     n = math.sqrt(w * w + x * x + y * y + z * z)
@@ -112,7 +112,7 @@ def quat_wxyz_normalize_into(w, x, y, z, q):
     q[3] = z / n
 
 
-@jit
+@jit(inline="always")
 def quat_wxyz_mul_into(a, b, q):
     """Hamilton product q = a * b of (w, x, y, z) quaternions (q must not alias a or b)."""
     q[0] = a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3]
@@ -121,7 +121,7 @@ def quat_wxyz_mul_into(a, b, q):
     q[3] = a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0]
 
 
-@jit
+@jit(inline="always")
 def so3_exp_quat_wxyz_into(x, y, z, q):
     """q = Exp([x, y, z]) as a unit quaternion: (cos(t/2), sin(t/2)/t [x, y, z])."""
     _, _, c, s = so3_exp_coeffs(x * x + y * y + z * z)
