@@ -76,7 +76,8 @@ def test_scene_file_runs_and_is_reproducible(tmp_path, capsys):
 
 BAD = [
     # text, line, message
-    ("motion: {scene: ellipse}\nimu:\n  rate: 100\noutput: {dir: o}\n", 3, "unknown key `imu.rate`; did you mean `rate_hz`"),
+    ("motion: {scene: ellipse}\nimu:\n  rate: 100\noutput: {dir: o}\n", 3,
+     "unknown key `imu.rate`; did you mean `rate_hz`"),
     ("motion: {scene: ellipse}\nimu:\n  rate_hz: -100\noutput: {dir: o}\n", 3, "`imu.rate_hz` must be positive"),
     ("motion: {scene: ellipse, poses: a.tum}\noutput: {dir: o}\n", 1, "exactly one of"),
     ("motion: {scene: ellipse}\n", 1, "`output.dir` is required"),
@@ -84,7 +85,8 @@ BAD = [
     ("motion: [1, 2\n", 2, "invalid YAML"),
     ("motion: {scene: elipse}\noutput: {dir: o}\n", 1, "did you mean 'ellipse'"),
     ("motion:\n  scene: circle\n  params:\n    radius: 3\noutput: {dir: o}\n", 3, "did you mean 'radius_m'"),
-    ("motion:\n  poses: a.tum\n  spline:\n    order: 12\noutput: {dir: o}\n", 4, "`motion.spline.order` must be between 2 and 8"),
+    ("motion:\n  poses: a.tum\n  spline:\n    order: 12\noutput: {dir: o}\n", 4,
+     "`motion.spline.order` must be between 2 and 8"),
     ("motion:\n  poses: a.tum\n  gaps: brige\noutput: {dir: o}\n", 3, "did you mean 'bridge'"),
     ("motion: {scene: static}\nimu:\n  model:\n    gyroscope_noise_density: 0.1\n    gyro_random_walk: 1\n"
      "output: {dir: o}\n", 5, "did you mean `gyroscope_random_walk`"),
