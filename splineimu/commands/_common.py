@@ -126,3 +126,11 @@ def run_synthesis(job) -> int:
 
     run_job(job, echo=echo)
     return 0
+
+
+def say(msg=""):
+    print(msg, flush=True)
+
+
+def stderr(msg):
+    print(msg, file=sys.stderr, flush=True)

@@ -367,6 +367,11 @@ class SensorModel:
         return meas, bias
 
 
+def _as_samples(x, n, name):
+    """(kept for splineimu.calibration, which imports it: use validation.as_vectors)"""
+    return as_vectors(x, name, n)
+
+
 def _as_times(t_s):
     t = as_times_s(t_s)
     if t.size == 0:
