@@ -117,6 +117,15 @@ def synthesize_to_memory(job: SynthesisJob) -> SynthesisResult:
     return run_job(job, write=False)
 
 
+def _start(job, motion_type, echo, write):
+    """Check the job's kind and its output location (fail fast); the wall clock, result and log."""
+    if not isinstance(job.motion, motion_type):
+        raise ConfigError(f"expected a job with {motion_type.__name__}, got {type(job.motion).__name__}")
+    result = SynthesisResult(job)
+    _check_output(job, write)
+    return time.perf_counter(), result, _Log(result, echo)
+
+
 def _check_output(job, write):
     if write:
         if job.output.dir is None and job.output.tum is None:
@@ -177,12 +186,7 @@ def synthesize_scene(job: SynthesisJob, *, echo=None, write: bool = True) -> Syn
     """
     from .. import scenes
 
-    if not isinstance(job.motion, SceneInput):
-        raise ConfigError(f"synthesize_scene needs a SceneInput, got {type(job.motion).__name__}")
-    t_wall = time.perf_counter()
-    result = SynthesisResult(job)
-    log = _Log(result, echo)
-    _check_output(job, write)
+    t_wall, result, log = _start(job, SceneInput, echo, write)
     m = job.motion
     scene = scenes.make_scene(m.name, duration_s=m.duration_s, t0_ns=m.t0_ns, **m.params)
     result.source = scene
@@ -211,12 +215,7 @@ def synthesize_poses(job: SynthesisJob, *, echo=None, write: bool = True) -> Syn
     """
     from ..io.poses import find_gaps, split_at_gaps
 
-    if not isinstance(job.motion, PosesInput):
-        raise ConfigError(f"synthesize_poses needs a PosesInput, got {type(job.motion).__name__}")
-    t_wall = time.perf_counter()
-    result = SynthesisResult(job)
-    log = _Log(result, echo)
-    _check_output(job, write)
+    t_wall, result, log = _start(job, PosesInput, echo, write)
     m = job.motion
     track = _read(m)
     for note in track.notices:

@@ -50,10 +50,8 @@ class Extrinsic:
 
     @property
     def matrix(self) -> np.ndarray:
-        T = np.eye(4)
-        T[:3, :3] = self.body_R_sensor
-        T[:3, 3] = self.body_t_sensor
-        return T
+        """``body_T_sensor`` as a (4, 4) homogeneous matrix."""
+        return np.block([[self.body_R_sensor, self.body_t_sensor[:, None]], [np.zeros((1, 3)), np.ones((1, 1))]])
 
     @classmethod
     def from_matrix(cls, T) -> Extrinsic:
