@@ -276,18 +276,17 @@ def _read(m: PosesInput):
 
 def _one(job, track, out_dir, gaps, max_gap, write, result, log):
     """Fit, stamps, synthesis and output of one piece of a pose file (``log`` None: quiet)."""
-    from ..spline.fit import DEFAULT_SMOOTHNESS, fit
+    from ..spline.fit import fit
 
     quiet = log is None
     log = log or _Log(result, None)
     sp = job.motion.spline
     origin = int(track.t_ns[0])
     t_s = (track.t_ns - origin).astype(np.float64) / 1e9
+    smooth = {} if sp.smoothness is None else {"smoothness": sp.smoothness}  # None: the fit's default
     spl, rep = fit(t_s, track.positions, track.quat_xyzw, kind=sp.kind, order=sp.order,
-                   knot_spacing_s=sp.knot_spacing_s,
-                   smoothness=DEFAULT_SMOOTHNESS if sp.smoothness is None else sp.smoothness,
-                   origin_ns=origin, reject_outliers=not sp.keep_outliers, progress=track.t_ns.size > 100_000,
-                   return_report=True)
+                   knot_spacing_s=sp.knot_spacing_s, **smooth, origin_ns=origin,
+                   reject_outliers=not sp.keep_outliers, progress=track.t_ns.size > 100_000, return_report=True)
     result.source, result.fit_report = spl, rep
     if rep.dropped_poses:
         lines = getattr(track, "line_numbers", None)
