@@ -154,7 +154,7 @@ def test_noise_free_imu_yaml_gives_the_rate_synthesized(tmp_path):
 
     cfg = ImuConfig.from_yaml(tmp_path / "o" / "imu.yaml")
     assert cfg.update_rate == 250.0 and not cfg.gyroscope_noise_density.any()
-    assert (tmp_path / "o" / "imu.yaml").read_text().startswith("# noise-free synthesis")
+    assert "# noise-free synthesis" in (tmp_path / "o" / "imu.yaml").read_text()
 
 
 def test_package_exports_the_api_lazily():
