@@ -278,7 +278,7 @@ def write_yaml(path, data, comment_lines=(), *, text: str | None = None) -> Path
 
     The file gets mode ``0666 & ~umask`` like every other output file.
     """
-    from .output import atomic_write_text
+    from .files import atomic_write_text
 
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
