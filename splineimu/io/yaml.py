@@ -35,6 +35,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..errors import ConfigError
+from .files import atomic_write_text
 
 #: Largest YAML file read (configuration files are a few kB; this refuses data files given by mistake).
 MAX_YAML_BYTES = 16 * 1024 * 1024
@@ -278,8 +279,6 @@ def write_yaml(path, data, comment_lines=(), *, text: str | None = None) -> Path
 
     The file gets mode ``0666 & ~umask`` like every other output file.
     """
-    from .files import atomic_write_text
-
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     return atomic_write_text(path, dump_yaml(data, comment_lines) if text is None else text)
