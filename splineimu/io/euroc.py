@@ -11,9 +11,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..validation import as_quat_xyzw, as_stamps_ns, as_vectors
-from .poses import PoseTrack, clean_poses
+from .poses import PoseTrack, track_from_table
 from .tables import TableWriter, write_table
-from .timestamps import _is_integer_text, parse_stamps, read_table
+from .timestamps import _is_integer_text, read_table
 
 __all__ = [
     "read_euroc_groundtruth",
@@ -109,33 +109,16 @@ def read_euroc_groundtruth(path, min_poses: int = 2, repeated_stamps: str = "err
     table = read_table(
         path, n_cols=8, column_names=_NAMES_17, sep=",", allow_header=True, wide_cols=17
     )
-    n_cols = table.n_cols
     notices = []
-    extra = table.extra_columns_notice()
-    if extra:
-        notices.append(extra)
     unit = "ns" if all(_is_integer_text(s) for s in table.stamps) else "s"
     if unit == "s":
         notices.append("timestamps have a decimal point: read as seconds, not EuRoC's nanoseconds")
-    t_ns, n_rounded = parse_stamps(table.stamps, unit, path=path, line_numbers=table.line_numbers)
-    if n_rounded:
-        notices.append(f"rounded {n_rounded} timestamps with more than 9 decimals to the nearest ns")
     v = table.values
-    quat_xyzw = v[:, [4, 5, 6, 3]]
     kw = {}
-    if n_cols == 17:
+    if table.n_cols == 17:
         kw = dict(velocity_world=v[:, 7:10], bias_gyro=v[:, 10:13], bias_accel=v[:, 13:16])
-    return clean_poses(
-        t_ns,
-        v[:, 0:3],
-        quat_xyzw,
-        path=path,
-        line_numbers=table.line_numbers,
-        notices=notices,
-        min_poses=min_poses,
-        repeated_stamps=repeated_stamps,
-        **kw,
-    )
+    return track_from_table(table, unit, v[:, [4, 5, 6, 3]], path=path, notices=notices, min_poses=min_poses,
+                            repeated_stamps=repeated_stamps, **kw)
 
 
 def _imu_table(t_ns, gyro, accel):

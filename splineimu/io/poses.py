@@ -25,7 +25,7 @@ import numpy as np
 from ..errors import InputError
 from ..lie import quat_make_continuous
 from ..validation import as_vectors, one_of, positive_float
-from .timestamps import format_ns
+from .timestamps import format_ns, parse_stamps
 
 __all__ = ["PoseTrack", "Gap", "clean_poses", "find_gaps", "split_at_gaps", "NORM_NOTICE_TOL"]
 
@@ -413,3 +413,24 @@ def split_at_gaps(track: PoseTrack, gaps) -> list[PoseTrack]:
         raise ValueError(f"Expected gap indices in 1..{len(track) - 1}, got {cuts}")
     bounds = [0] + cuts + [len(track)]
     return [track.subset(slice(a, b)) for a, b in zip(bounds[:-1], bounds[1:])]
+
+
+def track_from_table(table, unit: str, quat_xyzw, *, path, notices=(), min_poses: int = 2,
+                     repeated_stamps: str = "error", **extras) -> PoseTrack:
+    """A :class:`PoseTrack` from a pose file's :class:`~splineimu.io.timestamps.Table`.
+
+    The common end of every pose reader: stamps parsed exactly in ``unit``, positions from
+    the first three value columns, ``quat_xyzw`` (the reader's own column order already turned
+    into ``x, y, z, w``) and any ``extras`` (``velocity_world``...), then :func:`clean_poses`.
+    Notices about ignored extra columns and rounded stamps come first and last.
+    """
+    notices = list(notices)
+    extra = table.extra_columns_notice()
+    if extra:
+        notices.insert(0, extra)
+    t_ns, n_rounded = parse_stamps(table.stamps, unit, path=path, line_numbers=table.line_numbers)
+    if n_rounded:
+        where = "every timestamp" if n_rounded == len(t_ns) else f"{n_rounded} timestamps"
+        notices.append(f"rounded {where} with more than 9 decimals to the nearest ns")
+    return clean_poses(t_ns, table.values[:, 0:3], quat_xyzw, path=path, line_numbers=table.line_numbers,
+                       notices=notices, min_poses=min_poses, repeated_stamps=repeated_stamps, **extras)

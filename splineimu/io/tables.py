@@ -308,7 +308,7 @@ def write_table(path, t_ns, values, header: str | None = None, *, sep: str = ","
     Returns
     -------
     pathlib.Path
-        ``path``.
+        The file written.
 
     Examples
     --------

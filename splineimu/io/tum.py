@@ -10,9 +10,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..validation import as_quat_xyzw, as_stamps_ns, as_vectors
-from .poses import PoseTrack, clean_poses
+from .poses import PoseTrack, track_from_table
 from .tables import TableWriter, write_table
-from .timestamps import parse_stamps, read_table
+from .timestamps import read_table
 
 __all__ = ["read_tum", "write_tum", "TumWriter", "TUM_COLUMNS", "TUM_HEADER"]
 
@@ -69,25 +69,8 @@ def read_tum(path, min_poses: int = 2, repeated_stamps: str = "error") -> PoseTr
     ([1305031102175304000, 1305031102185304000], [2, 3])
     """
     table = read_table(path, n_cols=8, column_names=TUM_COLUMNS, sep="auto")
-    notices = []
-    extra = table.extra_columns_notice()
-    if extra:
-        notices.append(extra)
-    t_ns, n_rounded = parse_stamps(table.stamps, "s", path=path, line_numbers=table.line_numbers)
-    if n_rounded:
-        where = "every timestamp" if n_rounded == len(t_ns) else f"{n_rounded} timestamps"
-        notices.append(f"rounded {where} with more than 9 decimals to the nearest ns")
-    v = table.values
-    return clean_poses(
-        t_ns,
-        v[:, 0:3],
-        v[:, 3:7],
-        path=path,
-        line_numbers=table.line_numbers,
-        notices=notices,
-        min_poses=min_poses,
-        repeated_stamps=repeated_stamps,
-    )
+    return track_from_table(table, "s", table.values[:, 3:7], path=path, min_poses=min_poses,
+                            repeated_stamps=repeated_stamps)
 
 
 def _tum_table(t_ns, positions, quat_xyzw):
