@@ -215,18 +215,48 @@ class ImuConfig:
                 out[name] = compact(v)
         return out
 
-    def to_yaml(self, path, header: str | None = None) -> Path:
-        """Write :meth:`to_dict` as yaml, atomically (temporary file + rename).
+    def to_yaml(self, path, header: str | None = None, *, rostopic: str = "/imu0",
+                update_rate: float | None = None) -> Path:
+        """Write the configuration as a Kalibr ``imu.yaml``, atomically (temporary file + rename).
+
+        The file is Kalibr's ``imu.yaml`` (the four noise densities, ``rostopic``,
+        ``update_rate``), followed by the other keys that are set (:meth:`to_dict`). It starts
+        with ``%YAML 1.1`` and ``---`` and writes every number as a float that PyYAML and
+        OpenCV's ``FileStorage`` both read (``2.0e-05``, ``400.0``), so Kalibr, OpenVINS,
+        VINS-Fusion and Kimera read it as it is; :meth:`from_yaml` reads it back equal.
 
         Parameters
         ----------
         path : path-like
         header : str, optional
             Comment lines to put first (``#`` is added).
+        rostopic : str, default "/imu0"
+            The IMU's ROS topic (Kalibr requires the key).
+        update_rate : float, optional
+            The sample rate of the data this model describes [Hz], if it differs from
+            :attr:`update_rate` (e.g. the rate actually synthesized). Without either, the key
+            is left out.
 
         Returns
         -------
         Path of the written file.
+
+        Examples
+        --------
+        >>> import tempfile, pathlib
+        >>> cfg = ImuConfig.from_dict({"gyroscope_noise_density": 2e-05, "update_rate": 200})
+        >>> p = cfg.to_yaml(pathlib.Path(tempfile.mkdtemp()) / "imu.yaml", update_rate=400)
+        >>> print("\\n".join(line for line in p.read_text().splitlines() if not line.startswith("#")))
+        %YAML 1.1
+        ---
+        gyroscope_noise_density: 2.0e-05
+        gyroscope_random_walk: 0.0
+        accelerometer_noise_density: 0.0
+        accelerometer_random_walk: 0.0
+        rostopic: /imu0
+        update_rate: 400.0
+        >>> ImuConfig.from_yaml(p) == dataclasses.replace(cfg, update_rate=400.0)
+        True
         """
         lines = [
             "# IMU sensor model (splineimu). Continuous-time Kalibr units:",
@@ -236,9 +266,17 @@ class ImuConfig:
         ]
         if header:
             lines = ["# " + h if h else "#" for h in header.splitlines()] + lines
+        rest = self.to_dict()
+        data = {key: rest.pop(key) for key in KALIBR_KEYS}
+        data["rostopic"] = str(rostopic)
+        rate = rest.pop("update_rate", None) if update_rate is None else as_rate_hz(update_rate, "update_rate")
+        rest.pop("update_rate", None)
+        if rate is not None:
+            data["update_rate"] = float(rate)
+        data.update(rest)
         from ..io.imu_yaml import write_imu_yaml
 
-        return write_imu_yaml(path, self.to_dict(), lines)
+        return write_imu_yaml(path, data, lines)
 
     # ---------------------------------------------------------------- queries
 

@@ -50,7 +50,12 @@ def read_imu_yaml(path) -> YamlDoc:
 
 
 def write_imu_yaml(path, data: dict, comment_lines=()) -> Path:
-    """Write the mapping ``data`` of IMU keys (comment lines first) atomically.
+    """Write the mapping ``data`` of IMU keys (comment lines first) atomically, in a form that
+    Kalibr (PyYAML) and OpenCV's ``FileStorage`` (OpenVINS, VINS-Fusion, Kimera) both read.
+
+    The file starts with ``%YAML 1.1`` and ``---``, every float is written so that both read
+    a float (``2.0e-05``, ``400.0``) and list items are indented under their key
+    (:func:`~splineimu.io.yaml.dump_yaml` with ``opencv=True``).
 
     Parameters
     ----------
@@ -65,4 +70,4 @@ def write_imu_yaml(path, data: dict, comment_lines=()) -> Path:
     -------
     pathlib.Path
     """
-    return write_yaml(path, data, comment_lines)
+    return write_yaml(path, data, comment_lines, opencv=True)
