@@ -210,6 +210,17 @@ def test_error_names_the_source_and_yaml_line(tmp_path):
         ImuConfig.from_yaml(p)
 
 
+def test_bad_value_in_a_file_names_its_line(tmp_path):
+    p = tmp_path / "imu.yaml"
+    p.write_text("update_rate: 200\ngyroscope_noise_density: 1.0e-4\ngyroscope_random_walk: -2.0e-5\n")
+    with pytest.raises(ConfigError, match=r"imu\.yaml:3: `gyroscope_random_walk` must not be negative") as ei:
+        ImuConfig.from_yaml(p)
+    assert ei.value.line == 3 and ei.value.option == "gyroscope_random_walk"
+    p.write_text("%YAML:1.0\nimu0:\n  update_rate: 200\n  temperature_profile:\n    start: 20\n    rate: .nan\n")
+    with pytest.raises(ConfigError, match=r"imu\.yaml:6: `temperature_profile\.rate` must be finite"):
+        ImuConfig.from_yaml(p)
+
+
 def test_opencv_header_chain_and_companion_keys(tmp_path):
     p = tmp_path / "chain.yaml"
     p.write_text(

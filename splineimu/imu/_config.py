@@ -178,13 +178,22 @@ class ImuConfig:
         Raises
         ------
         ConfigError
-            File missing or unreadable, yaml syntax error (with its line), invalid keys.
+            File missing or unreadable, yaml syntax error, invalid keys or values; the
+            message starts with the file and the line of the key at fault.
         """
         from ..io.imu_yaml import read_imu_yaml
 
         path = Path(path)
-        d = read_imu_yaml(path).data
-        return cls.from_dict(d, source=str(path), base_dir=path.parent)
+        doc = read_imu_yaml(path)
+        try:
+            return cls.from_dict(doc.data, source=str(path), base_dir=path.parent)
+        except ConfigError as exc:
+            if exc.line is not None or not exc.option:
+                raise
+            inner = unwrap_chain(doc.data, str(path))
+            prefix = next((k,) for k, v in doc.data.items() if v is inner) if inner is not doc.data else ()
+            line = doc.line(*prefix, *exc.option.split("."))
+            raise type(exc)(exc.problem, path=exc.path, line=line, option=exc.option) from None
 
     # ---------------------------------------------------------------- output
 
