@@ -1147,7 +1147,7 @@ def write_calibration_yaml(path, *calibrations, source: str = "", force: bool = 
     import yaml
 
     from .errors import OutputExistsError
-    from .io.output import atomic_write_text
+    from .io.files import atomic_write_text
 
     path = Path(path)
     previous = None

@@ -271,7 +271,8 @@ def write_output(syn, out_dir, *, force=False, report: dict | None = None, bag: 
     records, when stderr is a terminal).
     """
     from .io.euroc import EUROC_GROUNDTRUTH_HEADER, EUROC_IMU_HEADER
-    from .io.output import OutputFolder, TableWriter
+    from .io.files import OutputFolder
+    from .io.tables import TableWriter
     from .io.tum import TUM_HEADER
     from .lie import matrix_to_quat_xyzw, quat_make_continuous
 

@@ -78,7 +78,7 @@ def plot_allan(result: AllanResult, fit: NoiseFit | None, path, title: str = "")
     fig.tight_layout()
     import io
 
-    from ..io.output import atomic_write_bytes
+    from ..io.files import atomic_write_bytes
 
     buf = io.BytesIO()
     try:

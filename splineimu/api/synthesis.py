@@ -132,7 +132,7 @@ def _check_output(job, write):
             raise ConfigError("nothing to write: give an output folder (or, for a scene, a TUM file)",
                               option="--out")
         if job.output.dir is not None:
-            from ..io.output import check_output_dir
+            from ..io.files import check_output_dir
 
             check_output_dir(job.output.dir, job.output.force)
 
@@ -249,7 +249,7 @@ def synthesize_poses(job: SynthesisJob, *, echo=None, write: bool = True) -> Syn
         for piece in pieces:
             result.pieces.append(_one(job, piece, None, [], max_gap, False, SynthesisResult(job), None))
         return result
-    from ..io.output import OutputFolder
+    from ..io.files import OutputFolder
 
     with OutputFolder(job.output.dir, force=job.output.force) as tmp:
         for i, piece in enumerate(pieces):

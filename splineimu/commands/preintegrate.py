@@ -53,7 +53,7 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
-    from ..io.output import atomic_write_text
+    from ..io.files import atomic_write_text
     from ..preintegration import evaluate_recording
 
     res = evaluate_recording(args.out_folder, imu_csv=args.imu_csv, groundtruth=args.groundtruth,
