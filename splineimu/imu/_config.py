@@ -28,9 +28,29 @@ from ._config_values import (
     unwrap_chain,
     vector,
 )
+from .openvins import OPENVINS_KEYS, from_openvins
 from .temperature import TemperatureProfile
 
 __all__ = ["ImuConfig"]
+
+
+def _with_openvins_intrinsics(d: dict, source: str) -> dict:
+    """``d`` with OpenVINS's ``Tw``, ``R_IMUtoGYRO``, ``Ta``, ``R_IMUtoACC``, ``Tg`` replaced by
+    the equivalent misalignment and g-sensitivity keys (:mod:`splineimu.imu.openvins`)."""
+    present = [k for k in OPENVINS_KEYS if d.get(k) is not None]
+    if not present:
+        return d
+    values = {k: matrix(d[k], k, source) for k in present}
+    if "model" in d:
+        values["model"] = d["model"]
+    derived = from_openvins(values, source)
+    for key in derived:
+        sensor = key.split("_")[0]
+        clash = [k for k in (key, f"{sensor}_scale") if d.get(k) is not None]
+        if clash:
+            raise error(f"`{clash[0]}` and OpenVINS's intrinsics ({', '.join(present)}) both describe "
+                        f"the {sensor}: give one or the other", source, clash[0])
+    return {**{k: v for k, v in d.items() if k not in OPENVINS_KEYS}, **derived}
 
 
 def _vec_field():
@@ -108,7 +128,7 @@ class ImuConfig:
         """
         if not isinstance(d, dict):
             raise error(f"expected a mapping of IMU parameters, got {type(d).__name__}", source)
-        d = unwrap_chain(d, source)
+        d = _with_openvins_intrinsics(unwrap_chain(d, source), source)
         names = set(field_names())
         known = names | {"rate_hz"}
         kwargs: dict = {}

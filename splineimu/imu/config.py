@@ -77,10 +77,14 @@ key                                    unit                 meaning
 ``<s>_saturation``                     <u>, vector > 0      range: output clipped to ``[-r, r]``
 ====================================== ==================== ==========================================
 
-Read but ignored: the non-noise keys of Kalibr, OpenVINS and EuRoC files (``rostopic``,
-``time_offset``, ``model``, ``T_i_b``, ``T_BS``, ``Tw``, ``Tg``, ``Ta``, ``R_IMUtoGYRO``,
-``R_IMUtoACC``, ``sensor_type``, ``comment``, ``accelerometers``, ``gyroscopes``; note that
-OpenVINS's intrinsic matrices are *not* applied: use the keys above), the companions
+OpenVINS's intrinsics (``Tw``, ``R_IMUtoGYRO``, ``Ta``, ``R_IMUtoACC``, ``Tg``, with its ``model``)
+are applied: they are read as the equivalent ``<s>_misalignment`` and
+``gyroscope_g_sensitivity`` (:mod:`splineimu.imu.openvins` states the correspondence); giving
+them together with those keys or a scale of the same sensor is an error.
+
+Read but ignored: the other keys of Kalibr, OpenVINS and EuRoC files (``rostopic``,
+``time_offset``, ``T_i_b``, ``T_BS``, ``sensor_type``, ``comment``, ``accelerometers``,
+``gyroscopes``), the companions
 ``<key>_avg`` and ``<key>_ci95`` of any key, and the informational ``allan`` section that
 ``splineimu allan`` writes. Any other key is an error with a did-you-mean.
 

@@ -11,10 +11,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..errors import ConfigError
-from .yaml import YamlDoc, read_yaml, write_yaml
+import numpy as np
 
-__all__ = ["read_imu_yaml", "write_imu_yaml"]
+from ..errors import ConfigError
+from .yaml import YamlDoc, float_text, read_yaml, write_yaml
+
+__all__ = ["read_imu_yaml", "write_imu_yaml", "kalibr_imu_chain_text"]
 
 
 def read_imu_yaml(path) -> YamlDoc:
@@ -71,3 +73,67 @@ def write_imu_yaml(path, data: dict, comment_lines=()) -> Path:
     pathlib.Path
     """
     return write_yaml(path, data, comment_lines, opencv=True)
+
+
+def _rows(key: str, M, indent: str) -> list[str]:
+    return [f"{indent}{key}:"] + [f"{indent}  - [{', '.join(float_text(v + 0.0) for v in row)}]"
+                                  for row in np.asarray(M, dtype=np.float64)]
+
+
+def _number(value) -> str:
+    if isinstance(value, list):
+        return "[" + ", ".join(float_text(v) for v in value) + "]"
+    return float_text(value)
+
+
+def kalibr_imu_chain_text(config, *, update_rate: float, rostopic: str = "/imu0", body_T_imu=None,
+                          time_offset: float = 0.0, header=()) -> str:
+    """The text of an OpenVINS ``kalibr_imu_chain.yaml`` for a sensor model.
+
+    The form of OpenVINS's own ``config/*/kalibr_imu_chain.yaml``: ``%YAML:1.0``, then ``imu0:``
+    with ``T_i_b`` (body points into the IMU frame: the inverse of ``body_T_imu``), the four
+    Kalibr noise keys, ``rostopic``, ``time_offset``, ``update_rate``, ``model`` and the
+    intrinsics ``Tw``, ``R_IMUtoGYRO``, ``Ta``, ``R_IMUtoACC``, ``Tg`` of
+    :func:`splineimu.imu.openvins.to_openvins` (identity / zero when the model has no scale,
+    misalignment or g-sensitivity). :meth:`ImuConfig.from_yaml` reads it back to the same
+    sensor model (its noise, scale, misalignment and g-sensitivity; the other components are
+    in ``imu.yaml``).
+
+    Parameters
+    ----------
+    config : ImuConfig or None
+        None: noise-free (densities zero).
+    update_rate : float
+        The rate of the data [Hz].
+    rostopic : str
+    body_T_imu : (4, 4) array_like, optional
+        The IMU's pose in the body frame (identity when omitted).
+    time_offset : float
+    header : sequence of str
+        Comment lines (``#`` is added).
+
+    Examples
+    --------
+    >>> print(kalibr_imu_chain_text(None, update_rate=400).splitlines()[:9])
+    ['%YAML:1.0', 'imu0:', '  T_i_b:', '    - [1.0, 0.0, 0.0, 0.0]', '    - [0.0, 1.0, 0.0, 0.0]', \
+'    - [0.0, 0.0, 1.0, 0.0]', '    - [0.0, 0.0, 0.0, 1.0]', '  accelerometer_noise_density: 0.0', \
+'  accelerometer_random_walk: 0.0']
+    """
+    from ..imu._config_values import compact
+    from ..imu.openvins import to_openvins
+
+    T_bi = np.eye(4) if body_T_imu is None else np.asarray(body_T_imu, dtype=np.float64)
+    T_ib = np.eye(4)
+    T_ib[:3, :3] = T_bi[:3, :3].T
+    T_ib[:3, 3] = -T_bi[:3, :3].T @ T_bi[:3, 3]
+    lines = ["%YAML:1.0", *("# " + h for h in header), "imu0:", *_rows("T_i_b", T_ib, "  ")]
+    for key in ("accelerometer_noise_density", "accelerometer_random_walk",
+                "gyroscope_noise_density", "gyroscope_random_walk"):
+        value = compact(getattr(config, key)) if config is not None else 0.0
+        lines.append(f"  {key}: {_number(value)}")
+    ov = to_openvins(config)
+    lines += [f"  rostopic: {rostopic}", f"  time_offset: {float_text(time_offset)}",
+              f"  update_rate: {float_text(update_rate)}", f"  model: \"{ov['model']}\""]
+    for key in ("Tw", "R_IMUtoGYRO", "Ta", "R_IMUtoACC", "Tg"):
+        lines += _rows(key, ov[key], "  ")
+    return "\n".join(lines) + "\n"
