@@ -258,18 +258,27 @@ def _versions():
 
 
 def write_output(syn, out_dir, *, force=False, report: dict | None = None, bag: str | None = None,
-                 plot: bool = False, fit_data=None, progress: bool | None = None):
-    """Write the EuRoC-like output folder atomically (DESIGN.md section 6).
+                 plot: bool = False, fit_data=None, progress: bool | None = None, rate_hz: float | None = None,
+                 rostopic: str = "/imu0", bag_version: int | None = None):
+    """Write the output folder, a EuRoC / ASL dataset, atomically (DESIGN.md section 6).
 
-    ``imu0/data.csv``, ``state_groundtruth_estimate0/data.csv`` (sensor pose, velocity and true
-    biases), ``groundtruth.tum`` (body poses at the IMU stamps), ``imu.yaml`` (the sensor
-    model used), ``report.json``; optionally a ROS bag and PNG plots.
+    ``mav0/imu0/data.csv`` and its ``sensor.yaml``, ``mav0/state_groundtruth_estimate0/data.csv``
+    (sensor pose, velocity and true biases) and its ``sensor.yaml``, ``mav0/body.yaml``
+    (:mod:`splineimu.io.dataset`); at the top ``groundtruth.tum`` (body poses at the IMU
+    stamps), ``imu.yaml`` (the sensor model used, Kalibr's form), ``kalibr_imu_chain.yaml``
+    (OpenVINS's form) and ``report.json``; optionally a ROS bag and PNG plots.
+
+    ``rate_hz`` is the rate written to the yaml files (the rate synthesized; default: from
+    ``report["rate_hz"]``, else from the median stamp spacing); ``rostopic`` the IMU's topic
+    there and in the bag; ``bag_version`` the ROS 2 bag's metadata version
+    (:func:`splineimu.io.bag.write_bag`).
 
     ``syn`` is a :class:`Synthesis` or a :class:`SynthesisStream`; a stream is synthesized
     and written piece by piece, in bounded memory (bags and plots need the whole record and
     collect it first). ``progress`` shows a progress bar on stderr (default: for long
     records, when stderr is a terminal).
     """
+    from .io import dataset as ds
     from .io.euroc import EUROC_GROUNDTRUTH_HEADER, EUROC_IMU_HEADER
     from .io.files import OutputFolder
     from .io.tables import TableWriter
@@ -299,16 +308,16 @@ def write_output(syn, out_dir, *, force=False, report: dict | None = None, bag: 
     with_increments = (syn.with_increments if isinstance(syn, SynthesisStream)
                        else syn.delta_angle is not None)
     with OutputFolder(out_dir, force=force) as tmp:
-        (tmp / "imu0").mkdir()
-        (tmp / "state_groundtruth_estimate0").mkdir()
-        files = [TableWriter(tmp / "imu0" / "data.csv", EUROC_IMU_HEADER),
-                 TableWriter(tmp / "state_groundtruth_estimate0" / "data.csv", EUROC_GROUNDTRUTH_HEADER),
+        for name in (ds.IMU_CSV, ds.GROUNDTRUTH_CSV):
+            (tmp / name).parent.mkdir(parents=True)
+        files = [TableWriter(tmp / ds.IMU_CSV, EUROC_IMU_HEADER),
+                 TableWriter(tmp / ds.GROUNDTRUTH_CSV, EUROC_GROUNDTRUTH_HEADER),
                  TableWriter(tmp / "groundtruth.tum", TUM_HEADER, sep=" ", stamp="s")]
         if with_increments:
-            files.append(TableWriter(tmp / "imu0" / "increments.csv",
+            files.append(TableWriter(tmp / ds.INCREMENTS_CSV,
                                      "#timestamp [ns] (end of interval),dtheta_x [rad],dtheta_y [rad],"
                                      "dtheta_z [rad],dv_x [m s^-1],dv_y [m s^-1],dv_z [m s^-1]"))
-            out_report["imu"]["increments"] = "imu0/increments.csv (exact delta-angle / delta-velocity " \
+            out_report["imu"]["increments"] = f"{ds.INCREMENTS_CSV} (exact delta-angle / delta-velocity " \
                 "over [previous stamp, stamp], sensor frame at the interval start)"
         bar = _progress_bar(n_total, progress)
         last_q = None
@@ -347,13 +356,17 @@ def write_output(syn, out_dir, *, force=False, report: dict | None = None, bag: 
         for f in files:
             f.close()
         out_report["imu"]["components_applied"] = list(applied)
-        _write_imu_yaml(tmp / "imu.yaml", syn)
+        if rate_hz is None:
+            rate_hz = out_report.get("rate_hz") or (float(1e9 / np.median(np.diff(t_all))) if t_all.size > 1
+                                                    else None)
+        _write_metadata(tmp, syn, rate_hz, rostopic)
         if bag:
-            from .io.bag import write_bag
+            from .io.bag import imu_covariances, write_bag
 
             name = "imu.bag" if bag == "ros1" else "bag_ros2"
             write_bag(tmp / name, bag, syn.t_ns, syn.gyro_rad_s, syn.accel_m_s2, syn.t_ns,
-                      syn.ideal.position_world, syn.ideal.quat_xyzw)
+                      syn.ideal.position_world, syn.ideal.quat_xyzw, imu_topic=rostopic,
+                      covariances=imu_covariances(syn.imu_config, rate_hz), version=bag_version)
             out_report["bag"] = name
         if plot:
             from .plots import plot_fit_residuals, plot_imu
@@ -389,13 +402,36 @@ def _json_default(o):
     return str(o)
 
 
-def _write_imu_yaml(path, syn):
-    """The sensor model used; for noise-free data the Kalibr keys at zero and the rate synthesized."""
-    from .imu.config import ImuConfig
+def _write_metadata(tmp, syn, rate_hz, rostopic):
+    """``imu.yaml`` (Kalibr), ``kalibr_imu_chain.yaml`` (OpenVINS) and the EuRoC ``sensor.yaml``
+    / ``body.yaml`` files, all with the rate synthesized; for noise-free data the noise keys at zero."""
+    from .imu.config import KALIBR_KEYS, ImuConfig
+    from .io import dataset as ds
+    from .io.files import atomic_write_text
+    from .io.imu_yaml import kalibr_imu_chain_text
 
-    if syn.imu_config is not None:
-        syn.imu_config.to_yaml(path)
-        return
-    rate = float(1e9 / np.median(np.diff(syn.t_ns))) if syn.t_ns.size > 1 else None
-    ImuConfig(update_rate=rate).to_yaml(
-        path, header="noise-free synthesis: no sensor model was given (use --imu IMU.yaml or a preset)")
+    cfg = syn.imu_config
+    header = None if cfg is not None else "noise-free synthesis: no sensor model was given (use --imu IMU.yaml or a preset)"
+    sampling = f"samples: {syn.sampling} (see report.json)"
+    (cfg if cfg is not None else ImuConfig()).to_yaml(tmp / "imu.yaml", header=header, rostopic=rostopic,
+                                                      update_rate=rate_hz)
+    T_BS = np.eye(4) if syn.extrinsic is None else syn.extrinsic.matrix
+    if rate_hz is not None:
+        atomic_write_text(tmp / "kalibr_imu_chain.yaml", kalibr_imu_chain_text(
+            cfg, update_rate=rate_hz, rostopic=rostopic, body_T_imu=T_BS,
+            header=["IMU intrinsics and noise in OpenVINS's form (splineimu); " + sampling]))
+    noise = {}
+    for key in KALIBR_KEYS:
+        v = np.zeros(3) if cfg is None else getattr(cfg, key)
+        noise[key] = float(np.max(v))
+    values = {"rate_hz": None if rate_hz is None else float(rate_hz), **noise}
+    values = {k: v for k, v in values.items() if v is not None}
+    what = "noise-free" if cfg is None else (cfg.source or "sensor model")
+    atomic_write_text(tmp / ds.IMU_SENSOR_YAML, ds.sensor_yaml_text(
+        "imu", f"splineimu synthetic IMU ({what}); {sampling}", T_BS, values,
+        header=["IMU sensor definition (splineimu). T_BS: the IMU's pose in the body frame."]))
+    atomic_write_text(tmp / ds.GROUNDTRUTH_SENSOR_YAML, ds.sensor_yaml_text(
+        "visual-inertial", "Exact ground truth of the IMU (splineimu): pose, velocity and true biases of "
+        "the imu0 frame.", T_BS))
+    atomic_write_text(tmp / ds.BODY_YAML, ds.body_yaml_text(
+        "Body frame: the frame of the input poses (groundtruth.tum); imu0 sits at T_BS in it."))

@@ -45,6 +45,7 @@ from ..validation import (
 FLAGS = {
     "rate_hz": "--rate", "timestamps": "--timestamps", "model": "--imu", "extrinsic": "--extrinsic",
     "gravity": "--gravity", "sampling": "--sampling", "increments": "--increments", "seed": "--seed",
+    "rostopic": "--rostopic", "bag_version": "--bag-version",
     "kind": "--spline", "order": "--order", "knot_spacing_s": "--knot-spacing", "smoothness": "--smoothness",
     "keep_outliers": "--keep-outliers",
     "path": "POSES", "format": "COMMAND", "repeated_stamps": "--repeated-stamps", "max_gap_s": "--max-gap",
@@ -191,6 +192,8 @@ class ImuOptions(_Checked):
     seed : int, optional
         Seed of the sensor model's random streams (a fresh one is drawn and reported if a
         model is given without seed).
+    rostopic : str
+        The IMU's ROS topic, written to ``imu.yaml`` / ``kalibr_imu_chain.yaml`` and used in bags.
 
     Raises
     ------
@@ -206,9 +209,12 @@ class ImuOptions(_Checked):
     sampling: str = "point"
     increments: bool = False
     seed: int | None = None
+    rostopic: str = "/imu0"
     origin: Origin | None = _origin_field()
 
     def __post_init__(self):
+        if not isinstance(self.rostopic, str) or not self.rostopic or any(c.isspace() for c in self.rostopic):
+            raise self._err("rostopic", f"must be a ROS topic name like /imu0, got {self.rostopic!r}")
         name, kw = self._kw("rate_hz")
         self.rate_hz = as_rate_hz(self.rate_hz, name, **kw)
         self.timestamps = self._path("timestamps")
@@ -422,6 +428,8 @@ class OutputOptions(_Checked):
         Also write PNG plots.
     tum : str, optional
         Scenes only: also write the scene's poses at the IMU rate as a TUM file.
+    bag_version : {8, 9}, optional
+        rosbag2 metadata version of a ROS 2 bag (default 8, read by Humble and newer).
     """
 
     dir: str | None = None
@@ -429,6 +437,7 @@ class OutputOptions(_Checked):
     bag: str | None = None
     plot: bool = False
     tum: str | None = None
+    bag_version: int | None = None
     origin: Origin | None = _origin_field()
 
     def __post_init__(self):
@@ -438,6 +447,10 @@ class OutputOptions(_Checked):
             self.bag = self._choice("bag", ("ros1", "ros2"))
         self.plot = self._bool("plot")
         self.tum = self._path("tum")
+        if self.bag_version is not None:
+            self.bag_version = self._choice("bag_version", (8, 9))
+            if self.bag != "ros2":
+                raise self._err("bag_version", "is for ROS 2 bags (give the ROS 2 bag too)")
 
 
 @dataclass
@@ -486,10 +499,10 @@ class SynthesisJob:
             for k, v in m.params.items():
                 argv += ["--param", f"{k}={','.join(map(_num, v)) if isinstance(v, list) else _num(v)}"]
         argv += _flags(self.imu, ("rate_hz", "timestamps", "model", "extrinsic", "gravity", "sampling",
-                                  "increments", "seed"))
+                                  "increments", "seed", "rostopic"))
         if self.output.dir is not None:
             argv += ["-o", self.output.dir]
-        argv += _flags(self.output, ("force", "bag", "plot", "tum"))
+        argv += _flags(self.output, ("force", "bag", "plot", "tum", "bag_version"))
         return argv
 
 

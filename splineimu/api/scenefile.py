@@ -61,8 +61,8 @@ KEYS = {
     ("motion",): ("scene", "duration_s", "t0_ns", "params", "poses", "format", "spline", "gaps", "max_gap_s",
                   "repeated_stamps"),
     ("motion", "spline"): ("kind", "order", "knot_spacing_s", "smoothness", "keep_outliers"),
-    ("imu",): ("rate_hz", "timestamps", "model", "extrinsic", "gravity", "sampling", "increments"),
-    ("output",): ("dir", "bag", "plot", "force", "tum"),
+    ("imu",): ("rate_hz", "timestamps", "model", "extrinsic", "gravity", "sampling", "increments", "rostopic"),
+    ("output",): ("dir", "bag", "plot", "force", "tum", "bag_version"),
 }
 
 #: Option field -> key in the file, where the two differ.
@@ -156,9 +156,9 @@ def load_scene_file(path) -> SynthesisJob:
     if "seed" in top:
         imu["seed"] = top["seed"]
     imu_opts = _build(ImuOptions, doc, imu, ("imu",), ("rate_hz", "timestamps", "model", "extrinsic", "gravity",
-                                                      "sampling", "increments", "seed"),
+                                                      "sampling", "increments", "seed", "rostopic"),
                       extra={"seed": ("seed",)})
-    output = _build(OutputOptions, doc, out, ("output",), ("dir", "force", "bag", "plot", "tum"))
+    output = _build(OutputOptions, doc, out, ("output",), ("dir", "force", "bag", "plot", "tum", "bag_version"))
     try:
         return SynthesisJob(source, imu_opts, output)
     except ConfigError as exc:

@@ -171,7 +171,9 @@ def _synthesize(job, source, t_ns, seed, out_dir, report, write, result, force=N
                             with_increments=imu.increments)
     if write:
         result.report = write_output(syn, out_dir, force=job.output.force if force is None else force, report=report,
-                                     bag=job.output.bag, plot=job.output.plot, fit_data=fit_data)
+                                     bag=job.output.bag, plot=job.output.plot, fit_data=fit_data,
+                                     rate_hz=None if imu.timestamps else imu.rate_hz, rostopic=imu.rostopic,
+                                     bag_version=job.output.bag_version)
         result.out_dir = Path(out_dir)
     else:
         result.synthesis = syn.collect()

@@ -14,12 +14,15 @@ import sys
 def add_output_args(p: argparse.ArgumentParser):
     g = p.add_argument_group("output")
     g.add_argument("-o", "--out", metavar="OUT",
-                   help="output folder (EuRoC-like layout: imu0/, state_groundtruth_estimate0/, "
-                        "groundtruth.tum, imu.yaml, report.json)")
+                   help="output folder, a EuRoC dataset: mav0/imu0/, mav0/state_groundtruth_estimate0/, "
+                        "groundtruth.tum, imu.yaml, kalibr_imu_chain.yaml, report.json")
     g.add_argument("--force", action="store_true", default=None,
                    help="replace an existing non-empty output folder")
     g.add_argument("--bag", choices=["ros1", "ros2"],
-                   help="also write a ROS bag (sensor_msgs/Imu on /imu0, geometry_msgs/PoseStamped ground truth)")
+                   help="also write a ROS bag (sensor_msgs/Imu on the --rostopic, geometry_msgs/PoseStamped "
+                        "ground truth); ros2: metadata version 8, read by Humble and newer")
+    g.add_argument("--bag-version", type=int, choices=[8, 9],
+                   help="rosbag2 metadata version of --bag ros2 (default 8; 9 for Jazzy and newer only)")
     g.add_argument("--plot", action="store_true", default=None,
                    help="also write PNG plots of the IMU signals (and fit residuals)")
 
@@ -41,9 +44,11 @@ def add_imu_args(p: argparse.ArgumentParser):
                    help="point: value at the stamp (default); mean: average over [previous stamp, stamp], "
                         "as an IMU's anti-alias / integrating front end gives")
     g.add_argument("--increments", action="store_true", default=None,
-                   help="also write imu0/increments.csv: delta-angle and delta-velocity per interval")
+                   help="also write mav0/imu0/increments.csv: delta-angle and delta-velocity per interval")
     g.add_argument("--gravity", type=float, nargs=3, metavar=("GX", "GY", "GZ"),
                    help="world gravity vector [m/s^2] (default 0 0 -9.81)")
+    g.add_argument("--rostopic", metavar="TOPIC",
+                   help="the IMU's ROS topic in imu.yaml, kalibr_imu_chain.yaml and bags (default /imu0)")
 
 
 def add_pose_args(p: argparse.ArgumentParser, fmt_help: str):
@@ -110,9 +115,11 @@ def options_from_args(args, motion: str):
         if args.out is None:
             args.out = Path(args.poses).stem + "_imu"
     imu = ImuOptions(**_given(args, rate_hz="rate", timestamps="timestamps", model="imu", extrinsic="extrinsic",
-                              gravity="gravity", sampling="sampling", increments="increments", seed="seed"),
+                              gravity="gravity", sampling="sampling", increments="increments", seed="seed",
+                              rostopic="rostopic"),
                      origin=o)
-    output = OutputOptions(**_given(args, dir="out", force="force", bag="bag", plot="plot", tum="tum"), origin=o)
+    output = OutputOptions(**_given(args, dir="out", force="force", bag="bag", plot="plot", tum="tum",
+                                    bag_version="bag_version"), origin=o)
     return SynthesisJob(source, imu, output)
 
 

@@ -1,9 +1,16 @@
 """ROS bags of synthesized IMU data and ground-truth poses, written with ``rosbags``.
 
-Two topics: ``sensor_msgs/msg/Imu`` (gyro and specific force; no orientation estimate,
-so ``orientation_covariance[0] = -1`` as the message definition and REP 145 ask) and
+Two topics: ``sensor_msgs/msg/Imu`` (gyro and specific force, their covariances from the
+noise model (:func:`imu_covariances`); no orientation estimate, so
+``orientation_covariance[0] = -1`` as the message definition and REP 145 ask) and
 ``geometry_msgs/msg/PoseStamped`` (``world_T_body``). Header stamps are the exact integer
 nanoseconds; the bag's record time is the header stamp.
+
+ROS 2 bags are written in rosbag2 metadata version 8 with sqlite3 storage by default: the
+newest version that ``rosbags`` writes and ROS 2 Humble parses (version 9 writes
+``offered_qos_profiles`` as a list, which Humble's ``metadata_io`` cannot read; see
+ros2/rosbag2 issue 2013). ``version=9`` suits Jazzy and newer. ROS 1 bags are format 2.0,
+which every ROS 1 distribution reads.
 
 ``rosbags`` is imported inside :func:`write_bag`, so importing this module is cheap.
 """
@@ -14,13 +21,36 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError, OutputExistsError
-from ..validation import as_quat_xyzw, as_stamps_ns, as_vectors, one_of
+from ..errors import ConfigError, InputError, OutputExistsError
+from ..validation import as_float_array, as_quat_xyzw, as_stamps_ns, as_vectors, one_of
 from .files import staged_path
 
-__all__ = ["write_bag", "BAG_KINDS"]
+__all__ = ["write_bag", "imu_covariances", "BAG_KINDS", "ROS2_BAG_VERSIONS", "ROS2_BAG_VERSION"]
 
 BAG_KINDS = ("ros1", "ros2")
+#: rosbag2 metadata versions that can be written, and the default (read by Humble and newer).
+ROS2_BAG_VERSIONS = (8, 9)
+ROS2_BAG_VERSION = 8
+
+
+def imu_covariances(config, rate_hz) -> tuple[np.ndarray, np.ndarray]:
+    """Row-major 3x3 covariances (9 values) of ``angular_velocity`` and ``linear_acceleration``:
+    the white noise of one sample, diagonal ``noise_density**2 * rate``.
+
+    Zero ("unknown" in ``sensor_msgs/Imu``) without a sensor model or a rate.
+
+    Examples
+    --------
+    >>> from splineimu.imu.config import ImuConfig
+    >>> g, a = imu_covariances(ImuConfig.from_dict({"gyroscope_noise_density": 1e-3}), 400.0)
+    >>> g.reshape(3, 3).diagonal().round(12).tolist(), bool(a.any())
+    ([0.0004, 0.0004, 0.0004], False)
+    """
+    if config is None or rate_hz is None:
+        return np.zeros(9), np.zeros(9)
+    rate = float(rate_hz)
+    return tuple(np.diag(np.asarray(getattr(config, f"{s}_noise_density"), dtype=np.float64) ** 2 * rate).ravel()
+                 for s in ("gyroscope", "accelerometer"))
 
 
 def _ros_stamps(t, name, kind):
@@ -47,6 +77,8 @@ def write_bag(
     frame_id: str = "imu0",
     world_frame_id: str = "world",
     force: bool = False,
+    covariances=None,
+    version: int | None = None,
 ) -> Path:
     """Write IMU samples and (optionally) ground-truth poses to a ROS 1 or ROS 2 bag.
 
@@ -76,6 +108,11 @@ def write_bag(
         ``header.frame_id`` of the pose messages.
     force : bool, default False
         Replace an existing ``path``.
+    covariances : (gyro (9,), accel (9,)), optional
+        ``angular_velocity_covariance`` and ``linear_acceleration_covariance`` of every IMU
+        message (:func:`imu_covariances`); zero ("unknown") when omitted.
+    version : {8, 9}, optional
+        rosbag2 metadata version (``kind="ros2"`` only); default :data:`ROS2_BAG_VERSION`.
 
     Returns
     -------
@@ -94,9 +131,7 @@ def write_bag(
     -----
     The bag is written to a hidden temporary sibling and renamed into place when it is
     complete, so an interrupted run leaves no partial bag. IMU messages carry
-    ``orientation = (0, 0, 0, 0)`` with ``orientation_covariance[0] = -1`` (no estimate)
-    and all-zero ``angular_velocity_covariance`` / ``linear_acceleration_covariance``
-    ("covariance unknown"), the way Kalibr's bag creator writes EuRoC data.
+    ``orientation = (0, 0, 0, 0)`` with ``orientation_covariance[0] = -1`` (no estimate).
 
     Examples
     --------
@@ -107,6 +142,9 @@ def write_bag(
     True
     """
     one_of(kind, "kind", BAG_KINDS)
+    if version is not None and kind != "ros2":
+        raise ConfigError("a bag version can only be chosen for ROS 2 bags", option="--bag-version")
+    version = ROS2_BAG_VERSION if version is None else one_of(int(version), "version", ROS2_BAG_VERSIONS)
     path = Path(path)
     if (path.exists() or path.is_symlink()) and not force:
         raise OutputExistsError(f"output '{path}' exists; use --force to replace it")
@@ -153,7 +191,8 @@ def write_bag(
 
     orient_cov = np.zeros(9)
     orient_cov[0] = -1.0
-    zero_cov = np.zeros(9)
+    gyro_cov, accel_cov = (np.zeros(9), np.zeros(9)) if covariances is None else (
+        as_float_array(c, "covariances", shape=(9,)) for c in covariances)
     no_orientation = Quaternion(x=0.0, y=0.0, z=0.0, w=0.0)
 
     # merge both streams by time so the bag is written in record-time order
@@ -175,7 +214,7 @@ def write_bag(
         else:
             from rosbags.rosbag2 import Writer
 
-            writer = Writer(tmp, version=Writer.VERSION_LATEST)
+            writer = Writer(tmp, version=version)
         with writer:
             c_imu = writer.add_connection(imu_topic, imu_type, typestore=store)
             c_pose = writer.add_connection(pose_topic, pose_type, typestore=store) if with_poses else None
@@ -188,9 +227,9 @@ def write_bag(
                         orientation=no_orientation,
                         orientation_covariance=orient_cov,
                         angular_velocity=Vector3(x=gx, y=gy, z=gz),
-                        angular_velocity_covariance=zero_cov,
+                        angular_velocity_covariance=gyro_cov,
                         linear_acceleration=Vector3(x=ax, y=ay, z=az),
-                        linear_acceleration_covariance=zero_cov,
+                        linear_acceleration_covariance=accel_cov,
                     )
                     writer.write(c_imu, t, serialize(msg, imu_type))
                 else:
