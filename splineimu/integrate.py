@@ -30,6 +30,10 @@ step. Three methods:
 Orders are in the sample interval ``h`` for smooth motion sampled at points (instantaneous
 values). Non-uniform sample times are allowed.
 
+Mean samples (``sampling="mean"``: each value the average over ``[t_{k-1}, t_k]``, as
+``splineimu --sampling mean`` and integrating IMU front ends give) are first turned into
+point values by :func:`points_from_means`, so every method keeps its order for them too.
+
 Extension to delta-angle / delta-velocity increments: the rk4 kernel consumes stage values
 (rate and specific force at ``t_k``, ``t_k + h/2``, ``t_{k+1}``). From increments
 ``dtheta_k = int w``, ``dv_k = int f`` over each interval, the cumulative sums are samples of
@@ -55,10 +59,75 @@ from ._kernels import integrate as _k
 from .errors import ConfigError, InputError
 from .lie import matrix_to_quat_xyzw, quat_make_continuous, quat_normalize, quat_xyzw_to_matrix
 from .motion import DEFAULT_GRAVITY
-from .validation import as_quat_xyzw, as_times_s, as_vector, as_vectors, finite_float, one_of
+from .validation import as_float_array, as_quat_xyzw, as_times_s, as_vector, as_vectors, finite_float, one_of
 
 __all__ = ["NavState", "Trajectory", "DeadReckoning", "integrate", "dead_reckon", "default_groundtruth_path",
-           "METHODS", "METHOD_ORDER"]
+           "points_from_means", "METHODS", "METHOD_ORDER", "SAMPLINGS"]
+
+#: Sampling modes of IMU data: the value at the stamp, or the mean over [previous stamp, stamp].
+SAMPLINGS = ("point", "mean")
+
+#: Nodes of the local interpolant of the integral in :func:`points_from_means`.
+_MEAN_NODES = 5
+
+
+def points_from_means(t_s, means) -> np.ndarray:
+    """Point values at ``t_s`` of a smooth signal given its means over ``[t_{k-1}, t_k]``.
+
+    The running integral ``A(t_k) = sum_{j<=k} means_j (t_j - t_{j-1})`` (``A(t_0) = 0``) is
+    known exactly at the stamps; the derivative of its Lagrange interpolant through the 5
+    nearest stamps (one-sided at the ends) gives the value at each stamp to fourth order in
+    the sample interval (uniform stamps: ``(-m_{k-1} + 7 m_k + 7 m_{k+1} - m_{k+2}) / 12``).
+    The first mean (whose interval starts before ``t_0``) is not used.
+
+    Parameters
+    ----------
+    t_s : (N,) array_like
+        Strictly increasing stamps [s], N >= 2.
+    means : (N, D) array_like
+        ``means[k]``: the mean over ``[t_{k-1}, t_k]``.
+
+    Returns
+    -------
+    (N, D) ndarray
+
+    Examples
+    --------
+    Means of ``t^3`` over unit intervals give back ``t^3`` at the stamps:
+
+    >>> t = np.arange(8.0)
+    >>> m = (t**4 - (t - 1) ** 4) / 4
+    >>> points_from_means(t, m[:, None]).ravel().round(9).tolist() == (t**3).tolist()
+    True
+    """
+    t = as_times_s(t_s, "t_s", increasing=True)
+    n = t.shape[0]
+    m = as_float_array(means, "means")
+    if m.ndim != 2 or m.shape[0] != n or n < 2:
+        raise InputError(f"Expected `means` of shape ({n}, D) with N >= 2, got {m.shape}")
+    A = np.zeros_like(m)
+    A[1:] = np.cumsum(m[1:] * np.diff(t)[:, None], axis=0)
+    k = min(_MEAN_NODES, n)
+    first = np.clip(np.arange(n) - k // 2, 0, n - k)
+    idx = first[:, None] + np.arange(k)[None, :]  # (N, k) node indices, each row holds its own stamp
+    pos = np.arange(n) - first
+    x = t[idx] - t[:, None]  # nodes relative to the target (the target node is 0)
+    w = np.zeros((n, k))
+    rows = np.arange(n)
+    for j in range(k):
+        others = [i for i in range(k) if i != j]
+        not_target = j != pos
+        # derivative at the target node x_p = 0 of the Lagrange basis l_j
+        num = np.ones(n)
+        for i in others:
+            num = num * np.where(i == pos, 1.0, -x[:, i])
+        den = np.ones(n)
+        for i in others:
+            den = den * (x[:, j] - x[:, i])
+        w[:, j] = np.where(not_target, num / den, 0.0)
+    w[rows, pos] = -w.sum(axis=1)  # the weights of a derivative sum to zero
+    return np.einsum("nk,nkd->nd", w, A[idx] - A[:, None, :])
+
 
 #: Integration methods and their order of accuracy in the sample interval.
 METHOD_ORDER = {"euler": 1, "midpoint": 2, "rk4": 4}
@@ -178,7 +247,7 @@ class Trajectory:
 
 
 def integrate(t_s, gyro, accel, init: NavState, method: str = "rk4",
-              gravity=DEFAULT_GRAVITY) -> Trajectory:
+              gravity=DEFAULT_GRAVITY, sampling: str = "point") -> Trajectory:
     """Dead-reckon body rate and specific force from an initial state.
 
     Parameters
@@ -196,6 +265,9 @@ def integrate(t_s, gyro, accel, init: NavState, method: str = "rk4",
         First, second or fourth order in the sample interval; see the module notes.
     gravity : (3,) array_like
         ``g_w`` [m/s^2], default (0, 0, -9.81).
+    sampling : {"point", "mean"}
+        ``gyro`` and ``accel`` are values at ``t_s``, or means over ``[t_{k-1}, t_k]``
+        (turned into point values by :func:`points_from_means` first).
 
     Returns
     -------
@@ -215,7 +287,7 @@ def integrate(t_s, gyro, accel, init: NavState, method: str = "rk4",
     Rotations are advanced with ``Exp`` and re-projected through their unit quaternion after
     every step. For rk4 the midpoint values are interpolated from the samples (Lagrange cubic
     through 4 neighbours), so the result is fourth order only for point samples of smooth
-    motion; averaged ("mean") samples are a different input model.
+    motion; averaged samples need ``sampling="mean"``.
 
     Examples
     --------
@@ -238,6 +310,9 @@ def integrate(t_s, gyro, accel, init: NavState, method: str = "rk4",
     w = as_vectors(gyro, "gyro", n)
     f = as_vectors(accel, "accel", n)
     g = as_vector(gravity, "gravity")
+    if one_of(sampling, "sampling", SAMPLINGS) == "mean":
+        both = points_from_means(t, np.hstack([w, f]))
+        w, f = np.ascontiguousarray(both[:, :3]), np.ascontiguousarray(both[:, 3:])
     if init.t_s is not None and abs(init.t_s - t[0]) > 1e-9 * max(1.0, abs(t[0])):
         raise ConfigError(f"The initial state is at t = {init.t_s!r} s but the first sample is at "
                           f"t = {t[0]!r} s; they must coincide")
@@ -290,6 +365,7 @@ class DeadReckoning:
     skipped_samples: int = 0
     final_position_error_m: float | None = None
     integrate_time_s: float = 0.0
+    sampling: str = "point"
 
     @property
     def method(self) -> str:
@@ -318,11 +394,15 @@ class DeadReckoning:
 
 
 def default_groundtruth_path(imu_csv) -> Path:
-    """``OUT/state_groundtruth_estimate0/data.csv`` for ``OUT/imu0/data.csv``."""
-    return Path(imu_csv).resolve().parent.parent / "state_groundtruth_estimate0" / "data.csv"
+    """``OUT/mav0/state_groundtruth_estimate0/data.csv`` for ``OUT/mav0/imu0/data.csv`` (and the
+    same without ``mav0/``)."""
+    from .io.dataset import groundtruth_beside
+
+    return groundtruth_beside(imu_csv)
 
 
-def dead_reckon(imu_path, init=None, method: str = "rk4", gravity=DEFAULT_GRAVITY) -> DeadReckoning:
+def dead_reckon(imu_path, init=None, method: str = "rk4", gravity=DEFAULT_GRAVITY,
+                sampling: str | None = None) -> DeadReckoning:
     """Dead-reckon an EuRoC IMU csv from the ground-truth state at its first covered sample.
 
     Parameters
@@ -337,6 +417,10 @@ def dead_reckon(imu_path, init=None, method: str = "rk4", gravity=DEFAULT_GRAVIT
     method : {"euler", "midpoint", "rk4"}
     gravity : (3,) array_like
         ``g_w`` [m/s^2].
+    sampling : {"point", "mean"}, optional
+        How the samples were taken; default: as recorded with the data
+        (:func:`splineimu.io.dataset.recorded_sampling`: ``report.json`` of the output folder,
+        else point).
 
     Returns
     -------
@@ -364,7 +448,10 @@ def dead_reckon(imu_path, init=None, method: str = "rk4", gravity=DEFAULT_GRAVIT
     from .groundtruth import read_groundtruth
     from .io.imu_csv import read_imu_csv
 
+    from .io.dataset import recorded_sampling
+
     imu_path = Path(imu_path)
+    sampling = recorded_sampling(imu_path) if sampling is None else one_of(sampling, "sampling", SAMPLINGS)
     gt_path = Path(init) if init is not None else default_groundtruth_path(imu_path)
     if not gt_path.is_file():
         hint = "" if init is not None else " (the default beside the IMU file); pass --init GROUND_TRUTH"
@@ -383,10 +470,10 @@ def dead_reckon(imu_path, init=None, method: str = "rk4", gravity=DEFAULT_GRAVIT
         raise ConfigError(f"fewer than 2 IMU samples inside the ground truth's time span ({gt_path})")
     t_s = (t_ns - t_ns[0]).astype(np.float64) / 1e9
     tic = time.perf_counter()
-    traj = integrate(t_s, gyro[i0:], accel[i0:], init_state, method=method, gravity=gravity)
+    traj = integrate(t_s, gyro[i0:], accel[i0:], init_state, method=method, gravity=gravity, sampling=sampling)
     elapsed = time.perf_counter() - tic
     err = None
     if gt.covers(t_ns[-1]):
         err = float(np.linalg.norm(traj.position_world[-1] - gt.state_at(t_ns[-1]).position_world))
     return DeadReckoning(traj, t_ns, imu_path, gt_path, skipped_samples=i0, final_position_error_m=err,
-                         integrate_time_s=elapsed)
+                         integrate_time_s=elapsed, sampling=sampling)

@@ -95,7 +95,7 @@ def test_run_job_returns_the_report_and_writes_the_folder(poses, tmp_path):
     # in memory: the same arrays, nothing written
     mem = synthesize_to_memory(dataclasses.replace(job, output=OutputOptions()))
     assert mem.out_dir is None and mem.report["spline"] == res.report["spline"]
-    t_ns, gyro, accel = read_imu_csv(tmp_path / "o" / "imu0" / "data.csv")
+    t_ns, gyro, accel = read_imu_csv(tmp_path / "o" / "mav0" / "imu0" / "data.csv")
     np.testing.assert_array_equal(t_ns, mem.synthesis.t_ns)
     np.testing.assert_array_equal(gyro, mem.synthesis.gyro_rad_s)  # the text holds every double exactly
     np.testing.assert_array_equal(accel, mem.synthesis.accel_m_s2)
@@ -110,7 +110,7 @@ def test_gaps_split_into_pieces(poses, tmp_path):
     assert sorted(p.name for p in (tmp_path / "o").iterdir()) == ["part_000", "part_001"]
     assert [p.out_dir.name for p in res.pieces] == ["part_000", "part_001"]
     assert res.pieces[1].report["source"]["first_ns"] == ORIGIN_NS + 4_500_000_000
-    np.testing.assert_array_equal(read_imu_csv(tmp_path / "o" / "part_001" / "imu0" / "data.csv")[0],
+    np.testing.assert_array_equal(read_imu_csv(tmp_path / "o" / "part_001" / "mav0" / "imu0" / "data.csv")[0],
                                   mem.pieces[1].synthesis.t_ns)
 
 
@@ -132,8 +132,9 @@ def test_scene_file_command_line_and_library_give_the_same_bytes(poses, tmp_path
     job = load_scene_file(f)
     run_job(dataclasses.replace(job, output=OutputOptions(str(tmp_path / "c"))))
     a = files_of(tmp_path / "a")
-    assert sorted(a) == ["groundtruth.tum", "imu.yaml", "imu0/data.csv", "report.json",
-                         "state_groundtruth_estimate0/data.csv"]
+    assert sorted(a) == ["groundtruth.tum", "imu.yaml", "kalibr_imu_chain.yaml", "mav0/body.yaml",
+                         "mav0/imu0/data.csv", "mav0/imu0/sensor.yaml", "mav0/state_groundtruth_estimate0/data.csv",
+                         "mav0/state_groundtruth_estimate0/sensor.yaml", "report.json"]
     assert files_of(tmp_path / "b") == a and files_of(tmp_path / "c") == a
 
 

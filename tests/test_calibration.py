@@ -470,11 +470,11 @@ def test_cli_scene_calibrate_and_read_back(tmp_path, capsys):
     assert _cli("scene", "six-position", "-o", six, "--imu", imu, "--seed", 4) == 0
     assert _cli("scene", "rate-table", "-o", rt, "--imu", imu, "--seed", 5) == 0
     capsys.readouterr()
-    assert _cli("calibrate", "accel", six / "imu0" / "data.csv", "-o", cal) == 0
+    assert _cli("calibrate", "accel", six / "mav0" / "imu0" / "data.csv", "-o", cal) == 0
     out = capsys.readouterr().out
     assert "6 steady phases, 6 used; g = 9.81 m/s^2 (report.json)" in out
     assert "truth" in out and "err/std" in out and "within 2 predicted std" in out
-    assert _cli("calibrate", "gyro", rt / "imu0" / "data.csv", "-o", cal) == 0
+    assert _cli("calibrate", "gyro", rt / "mav0" / "imu0" / "data.csv", "-o", cal) == 0
     out = capsys.readouterr().out
     assert "table rate 1 rad/s (report.json)" in out and "10 steady phases, 10 used" in out
     cfg = load_imu_config(str(cal / "calibration.yaml"))
@@ -485,15 +485,15 @@ def test_cli_scene_calibrate_and_read_back(tmp_path, capsys):
     assert sorted(p.name for p in cal.iterdir()) == ["calibration.yaml"]
     # a second run for the same sensor needs --force; the file is untouched
     before = (cal / "calibration.yaml").read_bytes()
-    assert _cli("calibrate", "gyro", rt / "imu0" / "data.csv", "-o", cal) == 1
+    assert _cli("calibrate", "gyro", rt / "mav0" / "imu0" / "data.csv", "-o", cal) == 1
     assert "already holds a gyroscope calibration" in capsys.readouterr().err
     assert (cal / "calibration.yaml").read_bytes() == before
-    assert _cli("calibrate", "gyro", rt / "imu0" / "data.csv", "-o", cal, "--force", "--tilt-sigma-deg", "0.5") == 0
+    assert _cli("calibrate", "gyro", rt / "mav0" / "imu0" / "data.csv", "-o", cal, "--force", "--tilt-sigma-deg", "0.5") == 0
     assert "nominal" in capsys.readouterr().out
     # wrong data for the sensor: a one-line error, exit 1
-    assert _cli("calibrate", "gyro", six / "imu0" / "data.csv") == 1
+    assert _cli("calibrate", "gyro", six / "mav0" / "imu0" / "data.csv") == 1
     assert "--table-rate" in capsys.readouterr().err
-    assert _cli("calibrate", "gyro", six / "imu0" / "data.csv", "--table-rate", "1") == 1
+    assert _cli("calibrate", "gyro", six / "mav0" / "imu0" / "data.csv", "--table-rate", "1") == 1
     assert "underdetermined" in capsys.readouterr().err
     assert _cli("calibrate") == 1
     assert "give the sensor" in capsys.readouterr().err
@@ -506,10 +506,10 @@ def test_cli_tilted_positions(tmp_path, capsys):
     assert _cli("scene", "six-position", "-o", six, "--imu", imu, "--seed", 4,
                 "--param", "tilt_sigma_deg=2", "--param", "tilt_seed=1") == 0
     capsys.readouterr()
-    assert _cli("calibrate", "accel", six / "imu0" / "data.csv") == 0
+    assert _cli("calibrate", "accel", six / "mav0" / "imu0" / "data.csv") == 0
     cap = capsys.readouterr()
     assert "consider --tilt-sigma-deg" in cap.err
-    assert _cli("calibrate", "accel", six / "imu0" / "data.csv", "--tilt-sigma-deg", "2") == 0
+    assert _cli("calibrate", "accel", six / "mav0" / "imu0" / "data.csv", "--tilt-sigma-deg", "2") == 0
     out = capsys.readouterr().out
     assert "random tilts, sigma 2 deg" in out and out.count(" tilt ") == 6
     hits = re.search(r"(\d+) of 12 within 2 predicted std \(nominal method: (\d+) of 12\)", out)

@@ -36,10 +36,10 @@ def ellipse_tum(tmp_path_factory):
 def test_scene_writes_the_output_layout(tmp_path, capsys):
     out = tmp_path / "out"
     assert run_cli("scene", "ellipse", "-o", out, "--duration", 5, "--rate", 200) == 0
-    for f in ("imu0/data.csv", "state_groundtruth_estimate0/data.csv", "groundtruth.tum", "imu.yaml",
+    for f in ("mav0/imu0/data.csv", "mav0/state_groundtruth_estimate0/data.csv", "groundtruth.tum", "imu.yaml",
               "report.json"):
         assert (out / f).is_file(), f
-    t_ns, gyro, acc = read_imu(out / "imu0" / "data.csv")
+    t_ns, gyro, acc = read_imu(out / "mav0" / "imu0" / "data.csv")
     assert t_ns.size == 1001 and t_ns[1] - t_ns[0] == 5_000_000
     g0, f0 = make_scene("ellipse", duration_s=5).imu(t_ns / 1e9)
     np.testing.assert_allclose(gyro, g0, atol=1e-15)
@@ -52,14 +52,14 @@ def test_scene_writes_the_output_layout(tmp_path, capsys):
 def test_static_scene_reads_plus_g(tmp_path):
     out = tmp_path / "s"
     assert run_cli("scene", "static", "-o", out, "--duration", 1) == 0
-    _, gyro, acc = read_imu(out / "imu0" / "data.csv")
+    _, gyro, acc = read_imu(out / "mav0" / "imu0" / "data.csv")
     assert np.all(gyro == 0) and np.allclose(acc, [0, 0, 9.81], atol=1e-15)
 
 
 def test_from_tum_reproduces_the_scene(ellipse_tum, tmp_path, capsys):
     out = tmp_path / "out"
     assert run_cli("from-tum", ellipse_tum, "-o", out, "--rate", 200) == 0
-    t_ns, gyro, acc = read_imu(out / "imu0" / "data.csv")
+    t_ns, gyro, acc = read_imu(out / "mav0" / "imu0" / "data.csv")
     origin = 1_403_636_579_758_555_392
     assert t_ns[0] == origin and (t_ns[-1] - origin) == 12_000_000_000
     g0, f0 = make_scene("ellipse", duration_s=12).imu((t_ns - origin) / 1e9)
@@ -78,7 +78,7 @@ def test_same_seed_same_bytes_and_noise_model_file(ellipse_tum, tmp_path):
         out = tmp_path / f"o{i}"
         assert run_cli("from-tum", ellipse_tum, "-o", out, "--imu", "adis16448", "--seed", seed,
                        "--knot-spacing", 0.05, "--order", 4) == 0
-        outs.append((out / "imu0" / "data.csv").read_bytes())
+        outs.append((out / "mav0" / "imu0" / "data.csv").read_bytes())
     assert outs[0] == outs[1] and outs[0] != outs[2]
     assert "gyroscope_noise_density" in (tmp_path / "o0" / "imu.yaml").read_text()
 
@@ -91,7 +91,7 @@ def test_existing_output_is_not_overwritten_without_force(ellipse_tum, tmp_path,
     assert "--force" in capsys.readouterr().err
     assert (out / "keep.txt").read_text() == "mine"
     assert run_cli("from-tum", ellipse_tum, "-o", out, "--force", "--knot-spacing", 0.1) == 0
-    assert not (out / "keep.txt").exists() and (out / "imu0" / "data.csv").exists()
+    assert not (out / "keep.txt").exists() and (out / "mav0" / "imu0" / "data.csv").exists()
 
 
 BAD_FILES = {
@@ -143,7 +143,7 @@ def test_gaps_error_bridge_split(tmp_path, capsys):
     assert run_cli("from-tum", src, "-o", tmp_path / "c", "--gaps", "split") == 0
     parts = sorted(p.name for p in (tmp_path / "c").iterdir())
     assert parts == ["part_000", "part_001"]
-    t0, _, _ = read_imu(tmp_path / "c" / "part_001" / "imu0" / "data.csv")
+    t0, _, _ = read_imu(tmp_path / "c" / "part_001" / "mav0" / "imu0" / "data.csv")
     assert t0[0] == 6_200_000_000
 
 
@@ -156,7 +156,7 @@ def test_timestamps_file_and_extrinsic(ellipse_tum, tmp_path):
     ext.write_text("translation: [0.1, -0.05, 0.02]\nquat_xyzw: [0, 0, 0.7071067811865476, 0.7071067811865476]\n")
     out = tmp_path / "out"
     assert run_cli("from-tum", ellipse_tum, "-o", out, "--timestamps", ts, "--extrinsic", ext) == 0
-    t_ns, gyro, _ = read_imu(out / "imu0" / "data.csv")
+    t_ns, gyro, _ = read_imu(out / "mav0" / "imu0" / "data.csv")
     np.testing.assert_array_equal(t_ns, stamps[1:5])
     # the sensor is yawed by +90 deg: w_s = R_bs^T w_b
     g0 = make_scene("ellipse", duration_s=12).imu((t_ns - origin) / 1e9)[0]
@@ -177,7 +177,7 @@ def test_real_euroc_gyro_matches_at_least_as_well_as_finite_differences(tmp_path
     imu = require_shared("euroc_V1_02_medium", "imu0_first40s.csv")
     out = tmp_path / "out"
     assert run_cli("from-euroc", gt, "-o", out, "--timestamps", imu) == 0
-    t_ns, gyro, _ = read_imu(out / "imu0" / "data.csv")
+    t_ns, gyro, _ = read_imu(out / "mav0" / "imu0" / "data.csv")
     rt, rg, _ = read_imu(imu)
     sel = np.isin(rt, t_ns)
     real_t, real_g = rt[sel], rg[sel]
@@ -214,7 +214,7 @@ def test_real_tum_vi_gaps_up_to_one_second(tmp_path):
     src = require_shared("tum_vi", "room1_512_16_groundtruth.tum")
     assert run_cli("from-tum", src, "-o", tmp_path / "a") == 1
     assert run_cli("from-tum", src, "-o", tmp_path / "b", "--max-gap", 1.1, "--rate", 100) == 0
-    _, gyro, acc = read_imu(tmp_path / "b" / "imu0" / "data.csv")
+    _, gyro, acc = read_imu(tmp_path / "b" / "mav0" / "imu0" / "data.csv")
     assert np.all(np.isfinite(gyro)) and np.abs(gyro).max() < 20 and np.abs(acc).max() < 100
 
 
@@ -226,7 +226,7 @@ def test_real_openvins_14_columns_and_utm_coordinates(tmp_path, capsys):
     assert run_cli("from-tum", geo, "-o", tmp_path / "b", "--gaps", "bridge", "--rate", 50) == 0
     rep = json.loads((tmp_path / "b" / "report.json").read_text())
     assert rep["spline"]["residual_position_rms_m"] < 1.0
-    _, gyro, acc = read_imu(tmp_path / "b" / "imu0" / "data.csv")
+    _, gyro, acc = read_imu(tmp_path / "b" / "mav0" / "imu0" / "data.csv")
     assert np.all(np.isfinite(acc)) and np.abs(acc).max() < 50
 
 
@@ -267,7 +267,7 @@ def test_output_files_get_the_usual_permissions(tmp_path):
     old = os.umask(0o022)
     try:
         assert main(["scene", "static", "--duration", "2", "-o", str(tmp_path / "out"), "--imu", "adis16448"]) == 0
-        assert main(["allan", str(tmp_path / "out" / "imu0" / "data.csv"), "-o", str(tmp_path / "al"),
+        assert main(["allan", str(tmp_path / "out" / "mav0" / "imu0" / "data.csv"), "-o", str(tmp_path / "al"),
                      "--plot"]) == 0
     finally:
         os.umask(old)

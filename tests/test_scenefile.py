@@ -84,11 +84,11 @@ def test_scene_file_runs_and_is_reproducible(tmp_path, capsys):
                  "imu:\n  rate_hz: 200\n  model: {gyroscope_noise_density: 0.015, accelerometer_noise_density: 0.019}\n"
                  "seed: 42\noutput: {dir: out}\n")
     assert main(["run", str(f)]) == 0
-    first = {p: (tmp_path / "out" / p).read_bytes() for p in ("imu0/data.csv", "report.json", "imu.yaml")}
+    first = {p: (tmp_path / "out" / p).read_bytes() for p in ("mav0/imu0/data.csv", "report.json", "imu.yaml")}
     assert main(["run", str(f), "--force"]) == 0
     for p, data in first.items():  # report.json too: no timings in it
         assert (tmp_path / "out" / p).read_bytes() == data, p
-    _, gyro, _ = read_imu_csv(tmp_path / "out" / "imu0" / "data.csv")
+    _, gyro, _ = read_imu_csv(tmp_path / "out" / "mav0" / "imu0" / "data.csv")
     assert 0.8 < np.std(np.diff(gyro[:, 0])) / (0.015 * np.sqrt(200) * np.sqrt(2)) < 1.2
     assert "0.015" in (tmp_path / "out" / "imu.yaml").read_text()
     capsys.readouterr()

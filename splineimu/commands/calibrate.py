@@ -27,11 +27,11 @@ with it (and with the true biases of state_groundtruth_estimate0/data.csv).
 
 examples:
   splineimu scene six-position -o six --imu imu.yaml --seed 1
-  splineimu calibrate accel six/imu0/data.csv -o cal
+  splineimu calibrate accel six/mav0/imu0/data.csv -o cal
   splineimu scene rate-table -o rt --imu imu.yaml --seed 2
-  splineimu calibrate gyro rt/imu0/data.csv -o cal            (adds the gyro to cal/)
+  splineimu calibrate gyro rt/mav0/imu0/data.csv -o cal            (adds the gyro to cal/)
   splineimu scene six-position -o six2 --imu imu.yaml --param tilt_sigma_deg=2
-  splineimu calibrate accel six2/imu0/data.csv --tilt-sigma-deg 2
+  splineimu calibrate accel six2/mav0/imu0/data.csv --tilt-sigma-deg 2
 """
 
 
@@ -80,7 +80,9 @@ def add_arguments(p):
 
 
 def _data_folder(csv_path: Path) -> Path:
-    return csv_path.parent.parent if csv_path.parent.name == "imu0" else csv_path.parent
+    from ..io.dataset import dataset_root
+
+    return dataset_root(csv_path)
 
 
 def _report(folder: Path):
@@ -132,7 +134,9 @@ def _truth(args, folder: Path, sensor: str, t_ns, cal):
     cfg = load_imu_config(args.truth or str(path))  # --truth may also name a preset
     K, b = intrinsics_from_config(cfg, sensor)
     note = f"truth: {path}"
-    gt = folder / "state_groundtruth_estimate0" / "data.csv"
+    from ..io.dataset import GROUNDTRUTH_CSV, dataset_file
+
+    gt = dataset_file(folder, GROUNDTRUTH_CSV)
     if gt.is_file():
         from ..io.euroc import read_euroc_groundtruth
 

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 NAME = "integrate"
-HELP = "dead-reckon an IMU csv (EuRoC imu0/data.csv) into a TUM trajectory"
+HELP = "dead-reckon an IMU csv (EuRoC mav0/imu0/data.csv) into a TUM trajectory"
 ORDER = 50
 DESCRIPTION = """\
 Strapdown dead reckoning of an EuRoC-format IMU file (#timestamp [ns], w xyz [rad/s],
@@ -15,6 +15,10 @@ IMU_CSV/../../state_groundtruth_estimate0/data.csv (the layout `splineimu from-t
 interpolated to the first IMU stamp inside the ground truth's span; IMU samples before it
 are skipped. Biases are held constant.
 
+Samples taken with --sampling mean (recorded in the output folder's report.json) are turned
+into point values first, so they integrate as accurately as point samples; --sampling
+overrides what is recorded.
+
 Methods: euler (1st order), midpoint (2nd), rk4 (4th, Munthe-Kaas on SO3). The rotation is
 always advanced with the exact SO3 exponential.
 
@@ -22,13 +26,13 @@ Output: TUM file `t tx ty tz qx qy qz qw` at every IMU stamp, t written exactly 
 integer nanoseconds ("%d.%09d").
 
 Example:
-  splineimu integrate out/imu0/data.csv --method rk4 -o dead_reckoning.tum
+  splineimu integrate out/mav0/imu0/data.csv --method rk4 -o dead_reckoning.tum
   splineimu compare dead_reckoning.tum out/groundtruth.tum
 """
 
 
 def add_arguments(parser) -> None:
-    parser.add_argument("imu_csv", metavar="IMU_CSV", help="EuRoC imu csv (e.g. OUT/imu0/data.csv)")
+    parser.add_argument("imu_csv", metavar="IMU_CSV", help="EuRoC imu csv (e.g. OUT/mav0/imu0/data.csv)")
     parser.add_argument("--method", choices=("euler", "midpoint", "rk4"), default="rk4",
                         help="integration method (default: rk4)")
     parser.add_argument("--init", metavar="GROUND_TRUTH", default=None,
@@ -37,17 +41,21 @@ def add_arguments(parser) -> None:
     parser.add_argument("--gravity", nargs=3, type=float, metavar=("GX", "GY", "GZ"),
                         default=(0.0, 0.0, -9.81), help="gravity in the world frame [m/s^2] "
                         "(default: 0 0 -9.81)")
+    parser.add_argument("--sampling", choices=("point", "mean"), default=None,
+                        help="the samples are values at the stamps, or means over [previous stamp, stamp] "
+                             "(default: as recorded in the folder's report.json, else point)")
     parser.add_argument("-o", "--output", required=True, metavar="TRAJ.tum", help="output TUM file")
 
 
 def run(args) -> int:
     from ..integrate import dead_reckon
 
-    res = dead_reckon(args.imu_csv, init=args.init, method=args.method, gravity=args.gravity)
+    res = dead_reckon(args.imu_csv, init=args.init, method=args.method, gravity=args.gravity,
+                      sampling=args.sampling)
     if res.skipped_samples:
         print(f"skipping {res.skipped_samples} IMU samples before the ground truth starts")
     out = res.write_tum(args.output)
-    print(f"integrated {len(res.trajectory)} samples ({res.trajectory.t_s[-1]:.3f} s) with {res.method} "
+    print(f"integrated {len(res.trajectory)} {res.sampling} samples ({res.trajectory.t_s[-1]:.3f} s) with {res.method} "
           f"in {res.integrate_time_s:.3f} s -> {out}")
     if res.final_position_error_m is not None:
         print(f"final position differs from the ground truth by {res.final_position_error_m:.6g} m")

@@ -6,8 +6,8 @@ NAME = "preintegrate"
 HELP = "preintegrate an output folder's IMU over windows and compare the deltas with ground truth"
 ORDER = 55
 DESCRIPTION = """\
-VINS-style preintegration (splineimu.preintegration) of OUT/imu0/data.csv over windows, compared
-with the exact deltas of OUT/state_groundtruth_estimate0/data.csv (EuRoC 17 columns: ns, p xyz,
+VINS-style preintegration (splineimu.preintegration) of OUT/mav0/imu0/data.csv over windows, compared
+with the exact deltas of OUT/mav0/state_groundtruth_estimate0/data.csv (EuRoC 17 columns: ns, p xyz,
 q w x y z, v xyz, b_w xyz, b_a xyz). Each window is linearized at the ground-truth biases at its
 start, so the errors are what the noise (and the bias drift inside the window) leaves.
 
@@ -22,6 +22,9 @@ default OUT/imu.yaml when it exists) the table also has each window's 9-dof NEES
 NEES (their 9x9 covariance is singular); windows of a few samples are dominated by the
 midpoint rule's deterministic discretization error in p, which the covariance does not model.
 
+Samples taken with --sampling mean (recorded in OUT/report.json) are turned into point values
+first; --sampling overrides what is recorded. Folders without mav0/ (older layout) are read too.
+
 Example:
   splineimu preintegrate out --every 200
   splineimu preintegrate out --stamps cam0_stamps.csv --imu imu.yaml -o windows.csv
@@ -29,7 +32,7 @@ Example:
 
 def add_arguments(parser) -> None:
     parser.add_argument("out_folder", metavar="OUT_FOLDER",
-                        help="folder with imu0/data.csv and state_groundtruth_estimate0/data.csv")
+                        help="folder with mav0/imu0/data.csv and mav0/state_groundtruth_estimate0/data.csv")
     win = parser.add_mutually_exclusive_group()
     win.add_argument("--every", type=int, metavar="N", default=None,
                      help="window length in IMU samples (default: about 1 s)")
@@ -45,9 +48,12 @@ def add_arguments(parser) -> None:
     parser.add_argument("--gravity", nargs=3, type=float, metavar=("GX", "GY", "GZ"),
                         default=(0.0, 0.0, -9.81), help="world gravity [m/s^2] (default: 0 0 -9.81)")
     parser.add_argument("--imu-csv", metavar="CSV", default=None,
-                        help="IMU csv instead of OUT_FOLDER/imu0/data.csv")
+                        help="IMU csv instead of OUT_FOLDER/mav0/imu0/data.csv")
     parser.add_argument("--groundtruth", metavar="CSV", default=None,
-                        help="ground truth instead of OUT_FOLDER/state_groundtruth_estimate0/data.csv")
+                        help="ground truth instead of OUT_FOLDER/mav0/state_groundtruth_estimate0/data.csv")
+    parser.add_argument("--sampling", choices=("point", "mean"), default=None,
+                        help="samples at the stamps, or means over [previous stamp, stamp] "
+                             "(default: as recorded in OUT_FOLDER/report.json, else point)")
     parser.add_argument("--all", action="store_true", help="print every window (default: at most 40)")
     parser.add_argument("-o", "--output", metavar="CSV", default=None, help="also write the table as csv")
 
@@ -58,7 +64,7 @@ def run(args) -> int:
 
     res = evaluate_recording(args.out_folder, imu_csv=args.imu_csv, groundtruth=args.groundtruth,
                              every=args.every, stamps=args.stamps, imu=args.imu, method=args.method,
-                             covariance=args.covariance, gravity=args.gravity)
+                             covariance=args.covariance, gravity=args.gravity, sampling=args.sampling)
     df = res.to_dataframe()
     print(f"{len(df)} windows, {args.method} / {args.covariance}; noise: "
           f"{res.noise_source if res.noise is not None else 'none (no NEES)'}")

@@ -1,7 +1,7 @@
 """Preintegration of a recording over windows, compared with its ground truth.
 
 :func:`evaluate_recording` is what ``splineimu preintegrate`` runs: it reads an output folder
-(``imu0/data.csv``, ``state_groundtruth_estimate0/data.csv``, optionally ``imu.yaml``), cuts the
+(``mav0/imu0/data.csv``, ``mav0/state_groundtruth_estimate0/data.csv``, optionally ``imu.yaml``), cuts the
 IMU stream into windows (:func:`make_windows`) and calls :func:`evaluate_windows`, which
 preintegrates each window linearized at the ground-truth biases at its start and compares the
 deltas with the exact ones of the ground truth (errors ``truth (-) estimate``, 9-dof NEES).
@@ -16,8 +16,9 @@ import numpy as np
 
 from ..errors import ConfigError, InputError, SplineImuError
 from ..groundtruth import GroundTruth
+from ..integrate import SAMPLINGS, points_from_means
 from ..motion import DEFAULT_GRAVITY
-from ..validation import as_stamps_ns, as_vectors
+from ..validation import as_stamps_ns, as_vectors, one_of
 from .deltas import Deltas, delta_error, deltas_from_states, nees
 from .preintegrator import Preintegrator
 
@@ -182,7 +183,7 @@ def _window_samples(t_ns, gyro, accel, a_ns, b_ns):
 
 def evaluate_windows(imu_t_ns, gyro, accel, groundtruth: GroundTruth, windows_ns, noise=None,
                      method="midpoint", covariance="consistent", gravity=DEFAULT_GRAVITY,
-                     noise_source: str = "") -> WindowResult:
+                     noise_source: str = "", sampling: str = "point") -> WindowResult:
     """Preintegrate a recording's IMU over windows and compare with its ground truth.
 
     Parameters
@@ -204,6 +205,9 @@ def evaluate_windows(imu_t_ns, gyro, accel, groundtruth: GroundTruth, windows_ns
         ``g_w`` the data were made with.
     noise_source : str
         Where ``noise`` came from (kept in the result).
+    sampling : {"point", "mean"}
+        The samples are values at the stamps, or means over ``[t_{k-1}, t_k]`` (turned into
+        point values first, :func:`splineimu.integrate.points_from_means`).
 
     Returns
     -------
@@ -214,6 +218,9 @@ def evaluate_windows(imu_t_ns, gyro, accel, groundtruth: GroundTruth, windows_ns
     imu_t_ns = as_stamps_ns(imu_t_ns, "imu_t_ns")
     gyro = as_vectors(gyro, "gyro", imu_t_ns.shape[0])
     accel = as_vectors(accel, "accel", imu_t_ns.shape[0])
+    if one_of(sampling, "sampling", SAMPLINGS) == "mean":
+        both = points_from_means((imu_t_ns - imu_t_ns[0]).astype(np.float64) * 1e-9, np.hstack([gyro, accel]))
+        gyro, accel = both[:, :3], both[:, 3:]
     windows = np.asarray(windows_ns, dtype=np.int64).reshape(-1, 2)
     if noise is None:
         dens = (0.0, 0.0, 0.0, 0.0)
@@ -299,13 +306,14 @@ def make_windows(imu_t_ns, gt_t_ns, every=None, stamps_ns=None) -> np.ndarray:
 
 def evaluate_recording(folder, *, imu_csv=None, groundtruth=None, every=None, stamps=None, imu=None,
                        method: str = "midpoint", covariance: str = "consistent",
-                       gravity=DEFAULT_GRAVITY) -> WindowResult:
+                       gravity=DEFAULT_GRAVITY, sampling: str | None = None) -> WindowResult:
     """Preintegrate a recording's IMU over windows and compare with its ground truth.
 
     Parameters
     ----------
     folder : path-like
-        Output folder with ``imu0/data.csv`` and ``state_groundtruth_estimate0/data.csv``.
+        Output folder with ``mav0/imu0/data.csv`` and ``mav0/state_groundtruth_estimate0/data.csv``
+        (or the older layout without ``mav0/``).
     imu_csv, groundtruth : path-like, optional
         Other files instead of the folder's.
     every : int, optional
@@ -318,6 +326,8 @@ def evaluate_recording(folder, *, imu_csv=None, groundtruth=None, every=None, st
         default ``folder/imu.yaml`` when it exists, else no NEES.
     method, covariance, gravity
         As in :func:`evaluate_windows`.
+    sampling : {"point", "mean"}, optional
+        Default: as recorded with the data (:func:`splineimu.io.dataset.recorded_sampling`).
 
     Returns
     -------
@@ -333,14 +343,18 @@ def evaluate_recording(folder, *, imu_csv=None, groundtruth=None, every=None, st
     from ..groundtruth import read_groundtruth
     from ..io.imu_csv import read_imu_csv
 
+    from ..io.dataset import GROUNDTRUTH_CSV, IMU_CSV, dataset_file, recorded_sampling
+
     out = Path(folder)
-    imu_path = Path(imu_csv) if imu_csv else out / "imu0" / "data.csv"
-    gt_path = Path(groundtruth) if groundtruth else out / "state_groundtruth_estimate0" / "data.csv"
+    imu_path = Path(imu_csv) if imu_csv else dataset_file(out, IMU_CSV)
+    gt_path = Path(groundtruth) if groundtruth else dataset_file(out, GROUNDTRUTH_CSV)
     for p, what in ((imu_path, "IMU csv"), (gt_path, "ground truth")):
         if not p.is_file():
             raise ConfigError(f"{what} not found: {p}")
     noise_spec = imu if imu else (out / "imu.yaml" if (out / "imu.yaml").is_file() else None)
     noise = noise_densities(noise_spec) if noise_spec is not None else None
+    if sampling is None:
+        sampling = recorded_sampling(imu_path) if imu_path.is_file() else "point"
     t_ns, gyro, accel = read_imu_csv(imu_path)
     gt = read_groundtruth(gt_path)
     if isinstance(stamps, (str, Path)):
@@ -349,4 +363,5 @@ def evaluate_recording(folder, *, imu_csv=None, groundtruth=None, every=None, st
         stamps = read_timestamps(stamps)
     windows = make_windows(t_ns, gt.t_ns, every=every, stamps_ns=stamps)
     return evaluate_windows(t_ns, gyro, accel, gt, windows, noise=noise, method=method, covariance=covariance,
-                            gravity=gravity, noise_source=str(noise_spec) if noise_spec is not None else "")
+                            gravity=gravity, noise_source=str(noise_spec) if noise_spec is not None else "",
+                            sampling=sampling)
