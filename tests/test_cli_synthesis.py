@@ -249,7 +249,7 @@ def test_streamed_output_equals_the_whole_record_byte_for_byte(tmp_path, samplin
     write_output(synthesize(scene, t_ns, **kw), tmp_path / "whole", report={})
     write_output(synthesize_stream(scene, t_ns, chunk_samples=333, **kw), tmp_path / "pieces", report={})
     names = sorted(p.relative_to(tmp_path / "whole") for p in (tmp_path / "whole").rglob("*") if p.is_file())
-    assert len(names) == 5 + increments
+    assert len(names) == 9 + increments
     for name in names:
         if name.name == "report.json":
             a, b = (json.loads((tmp_path / d / name).read_text()) for d in ("whole", "pieces"))
@@ -272,6 +272,6 @@ def test_output_files_get_the_usual_permissions(tmp_path):
     finally:
         os.umask(old)
     files = [p for p in tmp_path.rglob("*") if p.is_file()]
-    assert len(files) == 7
+    assert len(files) == 11
     for p in files:
         assert p.stat().st_mode & 0o777 == 0o644, p

@@ -127,7 +127,10 @@ def test_shared_kalibr_chain_files_load():
     np.testing.assert_array_equal(c.gyroscope_noise_density, [1.6968e-4] * 3)
     np.testing.assert_array_equal(c.accelerometer_random_walk, [3.0e-3] * 3)
     assert c.update_rate == 200.0
-    assert {"rostopic", "T_i_b", "model", "Tw", "Tg"} <= set(c.ignored_keys)
+    assert {"rostopic", "T_i_b", "model"} <= set(c.ignored_keys)
+    # OpenVINS's intrinsics are applied: identity Tw/Ta and zero Tg are no error at all
+    assert c.gyroscope_misalignment is None and c.accelerometer_misalignment is None
+    assert c.gyroscope_g_sensitivity is None
     tum = load_imu_config(require_shared("kalibr", "tum_vi_kalibr_imu_chain.yaml"))
     assert tum.to_dict() == {"gyroscope_noise_density": 0.00016, "gyroscope_random_walk": 2.2e-05,
                              "accelerometer_noise_density": 0.0028, "accelerometer_random_walk": 0.00086,
