@@ -310,14 +310,21 @@ def test_cli_allan_writes_yaml_that_loads_back_and_a_plot(tmp_path, capsys):
     assert back.update_rate == pytest.approx(200.0)
     np.testing.assert_allclose(back.gyroscope_noise_density, cfg.gyroscope_noise_density, rtol=0.05)
     np.testing.assert_allclose(back.accelerometer_noise_density, cfg.accelerometer_noise_density, rtol=0.05)
+    assert len(set(back.gyroscope_noise_density.tolist())) == 1  # the scalar (mean) is what is read
     import yaml
 
     d = yaml.safe_load((out / "allan.yaml").read_text())
+    import cv2
+
+    fs = cv2.FileStorage(str(out / "allan.yaml"), cv2.FILE_STORAGE_READ)
+    assert fs.isOpened() and fs.getNode("rostopic").string() == "/imu0" and fs.getNode("update_rate").isReal()
     for key in ("gyroscope_noise_density", "gyroscope_random_walk", "accelerometer_noise_density",
                 "accelerometer_random_walk"):
-        assert len(d[key]) == 3 and np.shape(d[key + "_ci95"]) == (3, 2)
-        assert d[key + "_avg"] == pytest.approx(np.mean(d[key]), rel=1e-5)
-        assert all(lo <= v <= hi for v, (lo, hi) in zip(d[key], d[key + "_ci95"]))
+        assert isinstance(d[key], float) and fs.getNode(key).isReal() and fs.getNode(key).real() == d[key]
+        assert len(d[key + "_xyz"]) == 3 and np.shape(d[key + "_ci95"]) == (3, 2)
+        assert d[key] == pytest.approx(np.mean(d[key + "_xyz"]), rel=1e-5)
+        assert all(lo <= v <= hi for v, (lo, hi) in zip(d[key + "_xyz"], d[key + "_ci95"]))
+    assert d["rostopic"] == "/imu0" and d["update_rate"] == 200.0
     assert (out / "allan.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert sorted(p.name for p in out.iterdir()) == ["allan.png", "allan.yaml"]
     # no silent overwrite; --plot needs -o
@@ -349,8 +356,9 @@ def test_analyze_recording_is_the_library_of_the_command(tmp_path):
     out = tmp_path / "out"
     assert write_allan_outputs(a, out) == [out / "allan.yaml"]
     back = load_imu_config(out / "allan.yaml")
-    np.testing.assert_allclose(back.gyroscope_noise_density, a.fit.white_noise_density[:3], rtol=1e-5)
-    assert (out / "allan.yaml").read_text().startswith(f"# splineimu allan: noise parameters identified from {csv}")
+    np.testing.assert_allclose(back.gyroscope_noise_density, np.mean(a.fit.white_noise_density[:3]), rtol=1e-5)
+    assert (out / "allan.yaml").read_text().startswith(
+        f"%YAML 1.1\n---\n# splineimu allan: noise parameters identified from {csv}")
     with pytest.raises(OutputExistsError, match="--force"):
         write_allan_outputs(a, out)
     with pytest.raises(ConfigError, match="not a directory"):

@@ -132,7 +132,7 @@ def write_allan_outputs(analysis: AllanAnalysis, out_dir, plot: bool = False, fo
     targets = allan_output_paths(out_dir, plot, force)
     Path(out_dir).mkdir(parents=True, exist_ok=True)
     result = analysis.result
-    write_yaml(targets[0], analysis.noise_dict(), allan_yaml_header(result, analysis.source))
+    write_yaml(targets[0], analysis.noise_dict(), allan_yaml_header(result, analysis.source), opencv=True)
     if plot:
         from .plot import plot_allan
 

@@ -29,10 +29,12 @@ def _pairs(a):
 def imu_noise_dict(result: AllanResult, fit: NoiseFit, source: str = "") -> dict:
     """Kalibr-keyed mapping of a six-axis fit (gyro x y z, accel x y z), as ``allan.yaml`` holds it.
 
-    Each Kalibr key holds the three per-axis values, ``<key>_avg`` their mean and
-    ``<key>_ci95`` one ``[low, high]`` pair per axis; ``update_rate`` is the data's rate. The
-    ``allan`` section (bias instability, resolution flags, record length) is informational:
-    :class:`splineimu.imu.config.ImuConfig` reads the file and ignores it.
+    The four Kalibr keys are scalar floats, the mean of the three axes, followed by
+    ``rostopic`` and ``update_rate`` (the data's rate), so that Kalibr (PyYAML) and OpenVINS
+    (OpenCV's ``FileStorage``) read the file as an ``imu.yaml``. The per-axis figures are under
+    their own keys: ``<key>_xyz`` the three values, ``<key>_ci95`` one ``[low, high]`` pair per
+    axis. The ``allan`` section (bias instability, resolution flags, record length) is
+    informational: :class:`splineimu.imu.config.ImuConfig` reads the file and ignores it.
 
     Raises
     ------
@@ -43,15 +45,18 @@ def imu_noise_dict(result: AllanResult, fit: NoiseFit, source: str = "") -> dict
         raise InputError("expected a six-axis fit (gyro xyz, accel xyz), "
                          f"got {fit.white_noise_density.shape[0]} axes")
     d: dict = {}
+    per_axis: dict = {}
     sl = {"gyroscope": slice(0, 3), "accelerometer": slice(3, 6)}
     for sensor in ("gyroscope", "accelerometer"):
         for key, val, ci in (("noise_density", fit.white_noise_density, fit.white_noise_density_ci95),
                              ("random_walk", fit.random_walk, fit.random_walk_ci95)):
             v = val[sl[sensor]]
-            d[f"{sensor}_{key}"] = _floats(v)
-            d[f"{sensor}_{key}_avg"] = _r6(np.mean(v))
-            d[f"{sensor}_{key}_ci95"] = _pairs(ci[sl[sensor]])
+            d[f"{sensor}_{key}"] = _r6(np.mean(v))
+            per_axis[f"{sensor}_{key}_xyz"] = _floats(v)
+            per_axis[f"{sensor}_{key}_ci95"] = _pairs(ci[sl[sensor]])
+    d["rostopic"] = "/imu0"
     d["update_rate"] = float(result.rate_hz)
+    d.update(per_axis)
     info: dict = {
         "source": str(source),
         "n_samples": int(result.n_samples),
@@ -76,8 +81,8 @@ def allan_yaml_header(result: AllanResult, source: str = "") -> list:
     return [
         f"# splineimu allan: noise parameters identified from {source}",
         f"# {result.n_samples} samples at {result.rate_hz:.6g} Hz ({result.duration_s:.1f} s).",
-        "# Each Kalibr key holds [x, y, z]; <key>_avg is their mean, <key>_ci95 the 95% interval",
-        "# per axis.",
+        "# Each Kalibr key holds the mean of the three axes; <key>_xyz holds [x, y, z] and <key>_ci95",
+        "# the 95% interval per axis.",
         "# Units: gyro noise rad/s/sqrt(Hz), gyro walk rad/s^2/sqrt(Hz), accel noise m/s^2/sqrt(Hz),",
         "# accel walk m/s^3/sqrt(Hz). Usable as `--imu` (the `allan` section is informational).",
     ]

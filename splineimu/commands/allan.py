@@ -16,11 +16,12 @@ instability B = (curve minimum) / 0.664, each with a 95% confidence interval.
 Input: an EuRoC imu0 csv (#timestamp [ns], gyro xyz [rad/s], accel xyz [m/s^2]), or an R
 matrix (.rda, e.g. ../shared/data/static/adis_16405_imu1.rda: 100 Hz, deg/s and g).
 
-With -o DIR: DIR/allan.yaml (Kalibr keys with the three per-axis values, <key>_avg, <key>_ci95
-and update_rate; usable as --imu DIR/allan.yaml), and with --plot DIR/allan.png.
+With -o DIR: DIR/allan.yaml (the four Kalibr keys as the mean of the three axes, rostopic and
+update_rate, read by Kalibr and OpenVINS as an imu.yaml and usable as --imu DIR/allan.yaml; the
+per-axis values under <key>_xyz and <key>_ci95), and with --plot DIR/allan.png.
 
 examples:
-  splineimu allan imu0/data.csv -o allan_out --plot
+  splineimu allan OUT/mav0/imu0/data.csv -o allan_out --plot
   splineimu allan adis_16405_imu1.rda --format rda --gyro-unit deg/s --accel-unit g
 """
 

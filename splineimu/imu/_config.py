@@ -141,7 +141,7 @@ class ImuConfig:
             if key in IGNORED_KEYS:
                 ignored.append(key)
                 continue
-            base = re.sub(r"_(avg|ci95)$", "", key)
+            base = re.sub(r"_(avg|ci95|xyz)$", "", key)
             if base != key and base in known:
                 ignored.append(key)
                 continue

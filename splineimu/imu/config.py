@@ -85,7 +85,7 @@ them together with those keys or a scale of the same sensor is an error.
 Read but ignored: the other keys of Kalibr, OpenVINS and EuRoC files (``rostopic``,
 ``time_offset``, ``T_i_b``, ``T_BS``, ``sensor_type``, ``comment``, ``accelerometers``,
 ``gyroscopes``), the companions
-``<key>_avg`` and ``<key>_ci95`` of any key, and the informational ``allan`` section that
+``<key>_avg``, ``<key>_xyz`` and ``<key>_ci95`` of any key, and the informational ``allan`` section that
 ``splineimu allan`` writes. Any other key is an error with a did-you-mean.
 
 Examples

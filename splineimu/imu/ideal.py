@@ -69,9 +69,12 @@ class Extrinsic:
         """``body_T_sensor`` from a mapping (an extrinsic file's content, or a scene file's value).
 
         Accepted forms: a 4x4 matrix under ``T_BS`` (EuRoC sensor.yaml, ``{rows, cols, data}``
-        or nested lists), ``T_bs``, ``body_T_sensor``, or Kalibr's ``T_i_b`` (IMU from body, which
-        is inverted); or ``translation: [x, y, z]`` with ``quat_xyzw: [x, y, z, w]``. A mapping
-        with one entry holding such a mapping (``{cam0: {T_BS: ...}}``) is unwrapped.
+        or nested lists), ``T_bs``, ``body_T_sensor``, OpenVINS's ``T_i_b`` (maps body points
+        into the IMU frame: the IMU's pose is its inverse), Kalibr's camchain ``T_cam_imu`` (for
+        poses of the camera: the IMU's pose in the camera frame, taken as it is) or OpenVINS's
+        ``T_imu_cam`` (its inverse); or ``translation: [x, y, z]`` with
+        ``quat_xyzw: [x, y, z, w]``. A mapping of entries (``{imu0: {T_i_b: ...}}``,
+        ``{cam0: {T_cam_imu: ...}, cam1: ...}``) gives the first entry holding such a key.
 
         Parameters
         ----------
@@ -90,10 +93,9 @@ class Extrinsic:
         [0.1, 0.0, 0.0]
         """
         path, line = where if isinstance(where, tuple) else (where, None)
-        if isinstance(d, dict) and len(d) == 1 and isinstance(next(iter(d.values())), dict):
-            inner = next(iter(d.values()))
-            if any(k in inner for k in ("T_BS", "T_bs", "T_i_b", "body_T_sensor")):
-                d = inner
+        keys = ("T_BS", "T_bs", "body_T_sensor", "T_i_b", "T_cam_imu", "T_imu_cam")
+        if isinstance(d, dict) and not any(k in d for k in (*keys, "translation", "quat_xyzw")):
+            d = next((v for v in d.values() if isinstance(v, dict) and any(k in v for k in keys)), d)
         if not isinstance(d, dict):
             raise ConfigError("expected a mapping with T_BS / T_bs / translation+quat_xyzw", path=path, line=line)
 
@@ -103,11 +105,12 @@ class Extrinsic:
             return cls.from_matrix(np.asarray(v, dtype=np.float64)).matrix
 
         try:
-            for key in ("T_BS", "T_bs", "body_T_sensor"):
+            for key in ("T_BS", "T_bs", "body_T_sensor", "T_cam_imu"):
                 if key in d:
                     return cls.from_matrix(mat(d[key]))
-            if "T_i_b" in d:
-                return cls.from_matrix(np.linalg.inv(mat(d["T_i_b"])))
+            for key in ("T_i_b", "T_imu_cam"):
+                if key in d:
+                    return cls.from_matrix(_rigid_inverse(mat(d[key])))
             if "translation" in d or "quat_xyzw" in d:
                 from ..lie import quat_xyzw_to_matrix
 
@@ -117,7 +120,8 @@ class Extrinsic:
             raise ConfigError(exc.problem, path=path, line=line) from None
         except (TypeError, ValueError) as exc:
             raise ConfigError(f"bad extrinsic ({exc})", path=path, line=line) from None
-        raise ConfigError("no T_BS, T_bs, body_T_sensor, T_i_b or translation/quat_xyzw key", path=path, line=line)
+        raise ConfigError("no T_BS, T_bs, body_T_sensor, T_i_b, T_cam_imu, T_imu_cam or translation/quat_xyzw key",
+                          path=path, line=line)
 
     @classmethod
     def from_file(cls, path) -> Extrinsic:
@@ -126,6 +130,14 @@ class Extrinsic:
 
         doc = read_yaml(path, "extrinsic file")
         return cls.from_dict(doc.data, where=doc.name)
+
+
+def _rigid_inverse(T: np.ndarray) -> np.ndarray:
+    """Inverse of a rigid 4x4 transform (``R^T``, ``-R^T t``: exact for an identity)."""
+    out = np.eye(4)
+    out[:3, :3] = T[:3, :3].T
+    out[:3, 3] = -(T[:3, :3].T @ T[:3, 3]) + 0.0
+    return out
 
 
 @dataclass

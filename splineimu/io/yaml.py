@@ -308,8 +308,9 @@ def dump_yaml(data, comment_lines=(), width: int = 110, *, opencv: bool = False)
         Preferred line width.
     opencv : bool, default False
         Also readable by OpenCV's ``cv::FileStorage`` (as OpenVINS, VINS-Fusion and Kimera
-        read their configuration): the document starts with :data:`OPENCV_COMPATIBLE_START`
-        and block list items are indented under their key.
+        read their configuration): the document starts with :data:`OPENCV_COMPATIBLE_START`,
+        block list items are indented under their key and long strings are not folded over
+        lines (OpenCV cannot read a continued plain scalar; ``width`` is then ignored).
 
     Notes
     -----
@@ -332,6 +333,8 @@ def dump_yaml(data, comment_lines=(), width: int = 110, *, opencv: bool = False)
     """
     import yaml
 
+    if opencv:
+        width = 1 << 30
     body = yaml.dump(data, Dumper=_dumper_class(opencv), sort_keys=False, default_flow_style=False, width=width)
     start = OPENCV_COMPATIBLE_START if opencv else ""
     return start + "".join(c + "\n" for c in comment_lines) + body
