@@ -24,12 +24,12 @@ from splineimu.calibration import (
     tilt_moments,
     write_calibration_yaml,
 )
-from splineimu.calibration_scenes import SIX_POSITION_ORDER, nominal_up_rotation
 from splineimu.cli import main
 from splineimu.errors import ConfigError, InputError, OutputExistsError
 from splineimu.imu.config import load_imu_config
 from splineimu.imu.noise import SensorModel
 from splineimu.scenes import SCENES, make_scene, scene_names
+from splineimu.scenes.calibration import SIX_POSITION_ORDER, nominal_up_rotation
 
 G = 9.81
 RATE_HZ = 200.0
