@@ -236,8 +236,8 @@ def test_segmentation_rejects_bad_settings():
         find_steady_phases(t, np.zeros((99, 3)))
     with pytest.raises(InputError, match="increasing"):
         find_steady_phases(t[::-1], np.zeros((100, 3)))
-    with pytest.raises(InputError, match="integer"):
-        find_steady_phases(t.astype(float), np.zeros((100, 3)))
+    with pytest.raises(InputError, match="whole nanoseconds"):
+        find_steady_phases(t + 0.5, np.zeros((100, 3)))
 
 
 # --------------------------------------------------------------------------- exact recovery
