@@ -46,9 +46,16 @@ Procedure
 4. **Least squares** for ``vec(K)`` and ``b``: ``y_p = a_p K u_p + b`` (``a_p = g`` or
    ``+-rate`` or 0), weighted by the inverse variances of step 2 (the rows of ``K`` and
    ``b`` decouple; the system must have rank 12, else the error lists the references
-   found). The predicted covariance is the inverse of the weighted normal matrix (white
-   noise only: bias drift during the recording and g-sensitivity of the gyro are not
-   modelled). With the reference exact, this is the classical method (``method="nominal"``).
+   found). The predicted covariance is the inverse of the weighted normal matrix. With the
+   reference exact and no drift, this is the classical method (``method="nominal"``).
+5. **Bias drift** (:mod:`~splineimu.calibration.drift`): the bias wanders as a random walk
+   over the whole recording, so the phase means also differ by the drift between them; its
+   covariance over the timeline of the phases used joins the white-noise variances (then the
+   least squares is generalized, and ``b`` is the bias averaged over the samples of the phases
+   used). The random-walk density is given (``random_walk``) or estimated from the data by
+   restricted maximum likelihood. :attr:`SensorCalibration.drift_share` says how much of the
+   predicted variance is drift; :attr:`SensorCalibration.drift_dominated` flags a result where
+   it outweighs the white noise. The g-sensitivity of the gyro is not modelled.
 
 Orientation error
 -----------------

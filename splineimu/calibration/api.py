@@ -65,6 +65,19 @@ class CalibrationRun:
     def unit(self) -> str:
         return "m/s^2" if self.sensor == "accelerometer" else "rad/s"
 
+    def drift_line(self) -> str:
+        """The bias drift used, or ``""`` when none was modelled."""
+        cal = self.calibration
+        if cal.random_walk_source == "none":
+            return ""
+        if not np.any(cal.random_walk > 0):
+            return "bias drift: no random walk found in the phases (white noise only)"
+        unit = "m/s^3/sqrt(Hz)" if self.sensor == "accelerometer" else "rad/s^2/sqrt(Hz)"
+        rw = np.unique(cal.random_walk)
+        text = ", ".join(f"{v:.3g}" for v in (rw if rw.size > 1 else rw[:1]))
+        return (f"bias drift: random walk {text} {unit} ({cal.random_walk_source}); up to "
+                f"{100 * cal.drift_share:.0f}% of a parameter's predicted variance")
+
     def summary(self) -> str:
         """The text ``splineimu calibrate`` prints: phases, fit statistic, estimates, truth, noise."""
         cal = self.calibration
@@ -76,6 +89,8 @@ class CalibrationRun:
                  phase_table(cal, self.unit), chi2_summary(cal)[0], estimates_table(cal, self.truth)]
         if self.truth is not None:
             lines.append(self.truth_note)
+        if self.drift_line():
+            lines.append(self.drift_line())
         lines.append(f"noise density from the phases: {np.array2string(cal.noise_density, precision=4)} "
                      f"{self.unit}/sqrt(Hz)")
         if self.written is not None:
@@ -208,6 +223,10 @@ def calibrate_file(path, sensor: str, options: CalibrationOptions | None = None,
     if chi2_summary(cal)[1]:
         run.notes.append("the phase means scatter more than the white noise explains (orientation error? "
                          "bias drift?); consider --tilt-sigma-deg")
+    if cal.drift_dominated:
+        run.notes.append(f"the bias drift over the recording dominates the uncertainty ({100 * cal.drift_share:.0f}% "
+                         "of some parameter's predicted variance): shorter moves between the phases, or a sensor "
+                         "whose bias has settled, give better estimates")
     got = _truth(truth, folder, sensor, t_ns, cal)
     if got is not None:
         run.truth, run.truth_note = got[:2], got[2]

@@ -8,11 +8,13 @@ then gives ``K``, ``b`` and their covariance (step 4). See :mod:`splineimu.calib
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
 from ..errors import ConfigError, InputError
 from ..validation import as_vectors, positive_float
+from .drift import estimate_random_walk, phase_drift_covariance
 from .options import CalibrationOptions
 from .result import AccelCalibration, GyroCalibration, SteadyPhase
 from .segmentation import FLOOR_REL, as_stamps_ns_checked, find_steady_phases
@@ -24,6 +26,15 @@ __all__ = ["calibrate_accel", "calibrate_gyro", "MAGNITUDE_RATIO_RANGE"]
 MAGNITUDE_RATIO_RANGE = (0.8, 1.25)
 
 _AXES = "xyz"
+
+
+class _Record(NamedTuple):
+    t: np.ndarray          # stamps [ns]
+    y: np.ndarray          # the calibrated sensor (N, 3)
+    other: np.ndarray | None  # the other sensor, when given
+    phases: list
+    dt: float
+    seg: dict
 
 
 def _axis_label(i, sign):
@@ -65,10 +76,24 @@ def _phases(t_ns, y, other, name, other_name, opts):
     phases, dt = _phase_stats(t, y, ranges, opts.noise_density)
     seg = {"window_s": opts.window_s, "threshold": opts.threshold, "min_dwell_s": opts.min_dwell_s,
            "margin_s": opts.effective_margin_s, "noise_level": noise_level, "phases_found": len(phases)}
-    return t, other, phases, dt, seg
+    return _Record(t, y, other, phases, dt, seg)
 
 
-def _finish(cls, sensor, phases, dt, opts, seg_info, extra, what):
+def _drift(rec, used, a, u0, groups, opts):
+    """``(density (3,), source, covariance (3P, 3P) or None)`` of the bias drift over the phases used."""
+    if opts.random_walk is not None:
+        density, source = np.array(opts.random_walk), "given"
+    else:
+        floor = FLOOR_REL * max(1.0, float(np.max(np.abs([p.mean for p in used]))))
+        sigma = estimate_random_walk(rec.t, rec.y, used, a, u0, groups, opts.tilt_sigma_rad, floor=floor)
+        density, source = np.full(3, sigma), "estimated"
+    if not np.any(density > 0):
+        return np.zeros(3), "none" if source == "given" else source, None
+    return density, source, np.kron(phase_drift_covariance(rec.t, used), np.diag(density**2))
+
+
+def _finish(cls, sensor, rec, opts, extra, what):
+    phases, dt = rec.phases, rec.dt
     used = [p for p in phases if p.used]
     if not used:
         raise InputError(f"no usable steady phases for the {sensor} calibration ({what})")
@@ -82,17 +107,22 @@ def _finish(cls, sensor, phases, dt, opts, seg_info, extra, what):
     remap = {g: k for k, g in enumerate(keys)}
     groups = np.array([remap.get(int(g), -1) if ai != 0.0 else -1 for g, ai in zip(groups, a)])
     found = ", ".join(sorted({p.label for p in used}))
+    if not solve_intrinsics(m, var, a, u0, groups, 0.0)[-1]:
+        raise InputError(f"the {sensor} calibration is underdetermined: the steady phases found give the "
+                         f"references {found or 'none'} ({len(used)} phases); {what}")
+    density, source, drift_cov = _drift(rec, used, a, u0, groups, opts)
 
     def result(method, tilt_sigma):
-        K, b, cov, tilts, chi2, ok = solve_intrinsics(m, var, a, u0, groups, tilt_sigma)
-        if not ok:
-            raise InputError(f"the {sensor} calibration is underdetermined: the steady phases found give the "
-                             f"references {found or 'none'} ({len(used)} phases); {what}")
+        K, b, white_cov, tilts, chi2, _ = solve_intrinsics(m, var, a, u0, groups, tilt_sigma)
+        cov = white_cov
+        if drift_cov is not None:
+            K, b, cov, tilts, chi2, _ = solve_intrinsics(m, var, a, u0, groups, tilt_sigma, drift_cov)
         pooled = np.sqrt(np.sum([(p.samples - 1) * p.std**2 for p in used], axis=0)
                          / max(1, sum(p.samples - 1 for p in used)))
         return cls(sensor=sensor, K=K, bias=b, covariance=cov, method=method, tilt_sigma_rad=tilt_sigma,
                    phases=phases, chi2=chi2, dof=3 * len(used) - 12, noise_level=pooled,
-                   noise_density=pooled * math.sqrt(dt), segmentation=seg_info, **extra), tilts
+                   noise_density=pooled * math.sqrt(dt), segmentation=rec.seg, random_walk=density,
+                   random_walk_source=source, white_covariance=white_cov, **extra), tilts
 
     nominal, _ = result("nominal", 0.0)
     if not opts.tilt_sigma_deg > 0:
@@ -161,10 +191,10 @@ def calibrate_accel(t_ns, accel, gravity: float = 9.81, *, gyro=None, options: C
     """
     opts = CalibrationOptions.merged(options, settings, "calibrate_accel")
     gravity = positive_float(gravity, "gravity")
-    _, _, phases, dt, seg = _phases(t_ns, accel, gyro, "accel", "gyro", opts)
+    rec = _phases(t_ns, accel, gyro, "accel", "gyro", opts)
     max_axis_angle_deg = opts.max_axis_angle_deg
     lo, hi = MAGNITUDE_RATIO_RANGE
-    for k, p in enumerate(phases):
+    for k, p in enumerate(rec.phases):
         i, sign, norm, ok_dir, ang = _check_direction(p.mean, max_axis_angle_deg)
         if not (lo * gravity <= norm <= hi * gravity):
             p.note = f"|mean| = {norm:.4g} m/s^2 is not within [{lo:g}, {hi:g}] g"
@@ -174,7 +204,7 @@ def calibrate_accel(t_ns, accel, gravity: float = 9.81, *, gyro=None, options: C
             continue
         p.used, p.magnitude, p.label, p.group = True, float(gravity), _axis_label(i, sign), k
         p.direction = sign * np.eye(3)[i]
-    return _finish(AccelCalibration, "accelerometer", phases, dt, opts, seg,
+    return _finish(AccelCalibration, "accelerometer", rec, opts,
                    {"gravity_m_s2": float(gravity)},
                    "the six-position test needs each axis up and down (static phases with the "
                    "gravity along +x, -x, +y, -y, +z, -z)")
@@ -243,11 +273,12 @@ def calibrate_gyro(t_ns, gyro, rate=None, *, accel=None, shared_mount: bool = Tr
     rates = np.array([positive_float(r, "rate") for r in np.atleast_1d(rate)], dtype=np.float64)
     if rates.size == 0:
         raise ConfigError("`rate` must be one or more positive rates [rad/s], got none", option="rate")
-    _, acc, phases, dt, seg = _phases(t_ns, gyro, accel, "gyro", "accel", opts)
+    rec = _phases(t_ns, gyro, accel, "gyro", "accel", opts)
+    acc = rec.other
     max_axis_angle_deg = opts.max_axis_angle_deg
     lo, hi = MAGNITUDE_RATIO_RANGE
     mounts: dict = {}
-    for k, p in enumerate(phases):
+    for k, p in enumerate(rec.phases):
         i, sign, norm, ok_dir, ang = _check_direction(p.mean, max_axis_angle_deg)
         if norm < 0.5 * rates.min():
             p.used, p.magnitude, p.label, p.group = True, 0.0, "rest", -1
@@ -271,7 +302,7 @@ def calibrate_gyro(t_ns, gyro, rate=None, *, accel=None, shared_mount: bool = Tr
         p.used, p.magnitude, p.group = True, float(sign * rates[j]), group
         p.label = _axis_label(i, sign) + (f" {rates[j]:g} rad/s" if rates.size > 1 else "")
         p.direction = np.eye(3)[i]
-    return _finish(GyroCalibration, "gyroscope", phases, dt, opts, seg,
+    return _finish(GyroCalibration, "gyroscope", rec, opts,
                    {"rates_rad_s": tuple(float(r) for r in rates)},
                    f"the rate table needs constant-rate phases about each axis at +-{rates[0]:g} rad/s "
                    "(and/or at rest)")

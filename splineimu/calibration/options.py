@@ -12,8 +12,8 @@ from ..validation import finite_float, nonnegative_float, positive_float
 __all__ = ["CalibrationOptions"]
 
 
-def _per_axis(v, name: str):
-    """``None`` or three positive floats (a scalar applies to every axis)."""
+def _per_axis(v, name: str, allow_zero: bool = False):
+    """``None`` or three positive (or with ``allow_zero`` non-negative) floats; a scalar applies to every axis."""
     if v is None:
         return None
     vals = list(v) if isinstance(v, (list, tuple)) or hasattr(v, "__array__") else [v]
@@ -21,7 +21,8 @@ def _per_axis(v, name: str):
         vals = vals * 3
     if len(vals) != 3:
         raise ConfigError(f"`{name}` must be one value or three (x, y, z), got {len(vals)}", option=name)
-    return tuple(positive_float(x, name) for x in vals)
+    check = nonnegative_float if allow_zero else positive_float
+    return tuple(check(x, name) for x in vals)
 
 
 @dataclass(frozen=True)
@@ -49,6 +50,10 @@ class CalibrationOptions:
         Largest difference of the two half-window means, in standard deviations of it.
     max_axis_angle_deg : float, default 25
         Largest angle between a phase's mean and the nearest axis for it to be used [deg].
+    random_walk : float or (3,) float, optional
+        Bias random-walk density of the sensor (accelerometer m/s^3/sqrt(Hz), gyro
+        rad/s^2/sqrt(Hz)) for the drift of the bias over the phases' timeline; default: estimated
+        from the phases (:func:`~splineimu.calibration.drift.estimate_random_walk`); 0: no drift.
 
     Raises
     ------
@@ -75,6 +80,7 @@ class CalibrationOptions:
     margin_s: float | None = None
     drift_threshold: float = 5.0
     max_axis_angle_deg: float = 25.0
+    random_walk: float | tuple | None = None
 
     def __post_init__(self):
         put = lambda k, v: object.__setattr__(self, k, v)  # noqa: E731 - frozen dataclass
@@ -89,6 +95,7 @@ class CalibrationOptions:
             raise ConfigError(f"`max_axis_angle_deg` must be in (0, 45), got {self.max_axis_angle_deg!r}",
                               option="max_axis_angle_deg")
         put("max_axis_angle_deg", ang)
+        put("random_walk", _per_axis(self.random_walk, "random_walk", allow_zero=True))
 
     @property
     def effective_margin_s(self) -> float:

@@ -139,6 +139,11 @@ class SensorCalibration:
         The segmentation settings and the per-channel noise level it used.
     nominal : SensorCalibration or None
         The classical (nominal-reference) estimate when ``method == "tilt"``.
+    random_walk : (3,) float64
+        Bias random-walk density used for the drift over the phases' timeline (zeros: none).
+    random_walk_source : {"given", "estimated", "none"}
+    white_covariance : (12, 12) float64 or None
+        :attr:`covariance` without the drift term (white noise and tilts only).
     """
 
     sensor: str
@@ -154,6 +159,9 @@ class SensorCalibration:
     noise_density: np.ndarray
     segmentation: dict = field(default_factory=dict)
     nominal: SensorCalibration | None = None
+    random_walk: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    random_walk_source: str = "none"
+    white_covariance: np.ndarray | None = None
 
     # ---------------------------------------------------------------- derived values
     @property
@@ -165,6 +173,21 @@ class SensorCalibration:
     def std(self) -> np.ndarray:
         """Predicted standard deviations of :attr:`parameters` (12,)."""
         return np.sqrt(np.clip(np.diag(self.covariance), 0.0, None))
+
+    @property
+    def drift_share(self) -> float:
+        """Largest share of a parameter's predicted variance that is due to the bias drift (0 to 1)."""
+        if self.white_covariance is None:
+            return 0.0
+        total = np.diag(self.covariance)
+        white = np.clip(np.diag(self.white_covariance), 0.0, None)
+        ok = total > 0
+        return float(np.max(1.0 - white[ok] / total[ok], initial=0.0))
+
+    @property
+    def drift_dominated(self) -> bool:
+        """The bias drift, not the white noise, sets the uncertainty of some parameter."""
+        return self.drift_share > 0.5
 
     @property
     def K_std(self) -> np.ndarray:
@@ -251,6 +274,9 @@ class SensorCalibration:
             "chi2": float(self.chi2),
             "dof": int(self.dof),
             "noise_density_estimate": self.noise_density.tolist(),
+            "random_walk": self.random_walk.tolist(),
+            "random_walk_source": self.random_walk_source,
+            "drift_share": self.drift_share,
             "segmentation": {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in self.segmentation.items()},
             "phases": [p.to_dict() for p in self.phases],
         }

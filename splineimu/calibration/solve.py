@@ -63,14 +63,15 @@ def tilt_moments(sigma: float):
     return c1, max(0.0, 0.5 * (1.0 + c2) - c1 * c1), 0.25 * (1.0 - c2)
 
 
-
-def solve_intrinsics(m, var, a, u0, group, tilt_sigma):
+def solve_intrinsics(m, var, a, u0, group, tilt_sigma, drift_cov=None):
     """Generalized least squares for ``K``, ``b`` with random orientation errors.
 
     Model: ``m_p = a_p K u_p + b + n_p``, ``n_p ~ N(0, diag(var_p))``; the phases of one
     group share ``u = Exp(theta_g) u0``, ``theta_g ~ N(0, tilt_sigma^2 I_2)``. Then
     ``E[m_p] = a_p c K u0_p + b`` and ``Cov(m_p, m_q) = a_p a_q K Sigma_u K^T`` within a group
     (:func:`tilt_moments`), which depends on ``K`` (iterated from the nominal estimate).
+    ``drift_cov`` (3P, 3P), when given, is added to the covariance of the phase means (bias
+    drift, :func:`~splineimu.calibration.drift.phase_drift_covariance`; index ``3 p + axis``).
 
     Returns (K, b, cov12, tilts (G, 2) best linear predictions, chi2, ok).
     """
@@ -87,7 +88,7 @@ def solve_intrinsics(m, var, a, u0, group, tilt_sigma):
     K = np.eye(3)
     x = None
     for _ in range(20):
-        C = np.diag(var.reshape(-1))
+        C = np.diag(var.reshape(-1)) if drift_cov is None else np.diag(var.reshape(-1)) + drift_cov
         # the tilt covariance uses the estimated scale factors only: the off-diagonal part of
         # the estimate carries the common tilt of each axis pair, not misalignment
         Kc = np.diag(np.diag(K))

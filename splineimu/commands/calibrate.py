@@ -10,9 +10,11 @@ Estimate the 3x3 scale-misalignment matrix K = M S and the bias b of the acceler
 (six-position test: at rest with each axis up and down) or of the gyro (rate table: each
 axis at +rate and -rate, and at rest). The steady phases are found in the data alone (moving
 standard deviation against the noise level); each phase's mean is assigned its nominal
-reference from its dominant axis; K and b follow by weighted least squares, with predicted
-standard deviations from the white noise of each phase. With --tilt-sigma-deg the positions'
-orientation errors are modelled as random tilts (the classical estimate is printed beside).
+reference from its dominant axis; K and b follow by generalized least squares, with predicted
+standard deviations from the white noise of each phase and the bias drift (random walk) over the
+timeline of the phases (its density estimated from the data unless --random-walk gives it).
+With --tilt-sigma-deg the positions' orientation errors are modelled as random tilts (the
+classical estimate is printed beside).
 
 Output with -o CAL: CAL/calibration.yaml. Its `imu0` section holds the estimates under the
 sensor-model keys (<sensor>_scale, <sensor>_misalignment with unit diagonal, <sensor>_bias), so
@@ -43,6 +45,9 @@ def _common(s):
                         "0 (default): references exactly along the axes")
     s.add_argument("--noise-density", type=float, metavar="N",
                    help="white-noise density for the weights (default: each phase's own scatter)")
+    s.add_argument("--random-walk", type=float, metavar="D",
+                   help="bias random-walk density for the drift over the phases (accel m/s^3/sqrt(Hz), gyro "
+                        "rad/s^2/sqrt(Hz); default: estimated from the data; 0: no drift)")
     s.add_argument("--window", type=float, default=0.5, metavar="S", help="moving window of the segmentation [s] (0.5)")
     s.add_argument("--threshold", type=float, default=1.5, metavar="X",
                    help="steady when the moving std is below X times the noise level (1.5)")
@@ -81,7 +86,8 @@ def run(args) -> int:
     if args.sensor is None:
         raise ConfigError("give the sensor: `splineimu calibrate accel IMU_CSV` or `splineimu calibrate gyro IMU_CSV`")
     options = CalibrationOptions(tilt_sigma_deg=args.tilt_sigma_deg, noise_density=args.noise_density,
-                                 window_s=args.window, threshold=args.threshold, min_dwell_s=args.min_dwell)
+                                 window_s=args.window, threshold=args.threshold, min_dwell_s=args.min_dwell,
+                                 random_walk=args.random_walk)
     accel = args.sensor == "accel"
     result = calibrate_file(args.input, args.sensor, options, out_dir=args.out, force=args.force, truth=args.truth,
                             gravity_m_s2=args.gravity_magnitude if accel else None,
