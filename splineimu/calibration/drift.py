@@ -29,10 +29,11 @@ means about the fit inform it.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["phase_drift_covariance", "estimate_random_walk"]
+__all__ = ["phase_drift_covariance", "estimate_random_walk", "RandomWalkFit"]
 
 
 def phase_drift_covariance(t_ns, phases) -> np.ndarray:
@@ -72,6 +73,13 @@ def phase_drift_covariance(t_ns, phases) -> np.ndarray:
     return C @ M @ C.T
 
 
+class RandomWalkFit(NamedTuple):
+    """A random-walk density fitted to the phases, with its likelihood-ratio statistic against none."""
+
+    density: float
+    lr_statistic: float
+
+
 def _blocks(t_ns, y, phases, block_s):
     """Block means of every phase.
 
@@ -104,7 +112,7 @@ def _blocks(t_ns, y, phases, block_s):
 
 
 def estimate_random_walk(t_ns, y, phases, a, u0, group, tilt_sigma: float = 0.0, block_s: float = 0.25,
-                         floor: float = 0.0) -> float:
+                         floor: float = 0.0) -> RandomWalkFit:
     """Random-walk density of one sensor from its steady phases (restricted maximum likelihood).
 
     Parameters
@@ -127,8 +135,9 @@ def estimate_random_walk(t_ns, y, phases, a, u0, group, tilt_sigma: float = 0.0,
 
     Returns
     -------
-    float
-        ``sigma_K`` (0 when the likelihood is largest without drift).
+    RandomWalkFit
+        ``density`` ``sigma_K`` (0 when the likelihood is largest without drift) and
+        ``lr_statistic``, twice the log-likelihood gain over no drift.
 
     Notes
     -----
@@ -178,4 +187,5 @@ def estimate_random_walk(t_ns, y, phases, a, u0, group, tilt_sigma: float = 0.0,
     best = minimize_scalar(lambda x: neg2_loglik(s0 * 10.0**x), bounds=(-8.0, 8.0), method="bounded",
                            options={"xatol": 1e-3})
     s = s0 * 10.0**best.x
-    return math.sqrt(s) if neg2_loglik(s) < neg2_loglik(0.0) else 0.0
+    gain = neg2_loglik(0.0) - neg2_loglik(s)
+    return RandomWalkFit(math.sqrt(s), gain) if gain > 0 else RandomWalkFit(0.0, 0.0)

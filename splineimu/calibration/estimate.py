@@ -80,16 +80,17 @@ def _phases(t_ns, y, other, name, other_name, opts):
 
 
 def _drift(rec, used, a, u0, groups, opts):
-    """``(density (3,), source, covariance (3P, 3P) or None)`` of the bias drift over the phases used."""
+    """``(density (3,), source, likelihood ratio, covariance (3P, 3P) or None)`` of the bias drift."""
     if opts.random_walk is not None:
-        density, source = np.array(opts.random_walk), "given"
+        density, source, lr = np.array(opts.random_walk), "given", math.inf
     else:
-        floor = FLOOR_REL * max(1.0, float(np.max(np.abs([p.mean for p in used]))))
-        sigma = estimate_random_walk(rec.t, rec.y, used, a, u0, groups, opts.tilt_sigma_rad, floor=floor)
-        density, source = np.full(3, sigma), "estimated"
+        # structure below 1e-6 of the signal (round-off, the smooth ends of noise-free moves) is no drift
+        floor = 1e-6 * max(1.0, float(np.max(np.abs([p.mean for p in used]))))
+        fit = estimate_random_walk(rec.t, rec.y, used, a, u0, groups, opts.tilt_sigma_rad, floor=floor)
+        density, source, lr = np.full(3, fit.density), "estimated", fit.lr_statistic
     if not np.any(density > 0):
-        return np.zeros(3), "none" if source == "given" else source, None
-    return density, source, np.kron(phase_drift_covariance(rec.t, used), np.diag(density**2))
+        return np.zeros(3), "none" if source == "given" else source, 0.0, None
+    return density, source, lr, np.kron(phase_drift_covariance(rec.t, used), np.diag(density**2))
 
 
 def _finish(cls, sensor, rec, opts, extra, what):
@@ -110,7 +111,7 @@ def _finish(cls, sensor, rec, opts, extra, what):
     if not solve_intrinsics(m, var, a, u0, groups, 0.0)[-1]:
         raise InputError(f"the {sensor} calibration is underdetermined: the steady phases found give the "
                          f"references {found or 'none'} ({len(used)} phases); {what}")
-    density, source, drift_cov = _drift(rec, used, a, u0, groups, opts)
+    density, source, lr, drift_cov = _drift(rec, used, a, u0, groups, opts)
 
     def result(method, tilt_sigma):
         K, b, white_cov, tilts, chi2, _ = solve_intrinsics(m, var, a, u0, groups, tilt_sigma)
@@ -122,7 +123,7 @@ def _finish(cls, sensor, rec, opts, extra, what):
         return cls(sensor=sensor, K=K, bias=b, covariance=cov, method=method, tilt_sigma_rad=tilt_sigma,
                    phases=phases, chi2=chi2, dof=3 * len(used) - 12, noise_level=pooled,
                    noise_density=pooled * math.sqrt(dt), segmentation=rec.seg, random_walk=density,
-                   random_walk_source=source, white_covariance=white_cov, **extra), tilts
+                   random_walk_source=source, random_walk_lr=lr, white_covariance=white_cov, **extra), tilts
 
     nominal, _ = result("nominal", 0.0)
     if not opts.tilt_sigma_deg > 0:

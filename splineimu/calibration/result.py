@@ -17,6 +17,10 @@ from ..errors import ConfigError
 __all__ = ["PARAMETER_NAMES", "SteadyPhase", "SensorCalibration", "AccelCalibration", "GyroCalibration",
            "split_scale_misalignment"]
 
+#: Likelihood-ratio statistic above which an estimated drift is significant (1% for a variance on
+#: its boundary, the mixture of chi2_0 and chi2_1).
+DRIFT_SIGNIFICANCE = 5.41
+
 #: Names of the twelve estimated parameters, in the order of :attr:`SensorCalibration.covariance`.
 PARAMETER_NAMES = tuple([f"K[{i},{j}]" for i in range(3) for j in range(3)] + [f"b[{i}]" for i in range(3)])
 
@@ -142,6 +146,9 @@ class SensorCalibration:
     random_walk : (3,) float64
         Bias random-walk density used for the drift over the phases' timeline (zeros: none).
     random_walk_source : {"given", "estimated", "none"}
+    random_walk_lr : float
+        Likelihood-ratio statistic of the estimated drift against none (inf when given); above
+        :data:`DRIFT_SIGNIFICANCE` the drift is significant.
     white_covariance : (12, 12) float64 or None
         :attr:`covariance` without the drift term (white noise and tilts only).
     """
@@ -161,6 +168,7 @@ class SensorCalibration:
     nominal: SensorCalibration | None = None
     random_walk: np.ndarray = field(default_factory=lambda: np.zeros(3))
     random_walk_source: str = "none"
+    random_walk_lr: float = 0.0
     white_covariance: np.ndarray | None = None
 
     # ---------------------------------------------------------------- derived values
@@ -186,8 +194,8 @@ class SensorCalibration:
 
     @property
     def drift_dominated(self) -> bool:
-        """The bias drift, not the white noise, sets the uncertainty of some parameter."""
-        return self.drift_share > 0.5
+        """The bias drift, significant in the data (or given), sets the uncertainty of some parameter."""
+        return self.drift_share > 0.5 and self.random_walk_lr > DRIFT_SIGNIFICANCE
 
     @property
     def K_std(self) -> np.ndarray:
@@ -277,6 +285,7 @@ class SensorCalibration:
             "random_walk": self.random_walk.tolist(),
             "random_walk_source": self.random_walk_source,
             "drift_share": self.drift_share,
+            "drift_lr_statistic": float(self.random_walk_lr),
             "segmentation": {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in self.segmentation.items()},
             "phases": [p.to_dict() for p in self.phases],
         }
