@@ -52,7 +52,7 @@ def phase_drift_covariance(t_ns, phases) -> np.ndarray:
     >>> t = np.arange(400, dtype=np.int64) * 10_000_000            # 100 Hz, 4 s
     >>> D = phase_drift_covariance(t, [P(start=0, stop=100), P(start=300, stop=400)])
     >>> D.round(3).tolist()                                         # two 1 s phases, 3 s apart
-    [[0.666, -0.666], [-0.666, 0.666]]
+    [[0.667, -0.667], [-0.667, 0.667]]
     """
     t0 = int(t_ns[phases[0].start]) if phases else 0
     n = np.array([p.stop - p.start for p in phases], dtype=np.float64)
