@@ -112,8 +112,8 @@ def cli_end_to_end():
         out = os.path.join(d, "static")
         cmds = [("splineimu scene static --duration 10800 --imu adis16448 -o OUT",
                  exe + ["scene", "static", "--duration", "10800", "--imu", "adis16448", "-o", out, "--force"]),
-                ("splineimu allan OUT/imu0/data.csv",
-                 exe + ["allan", os.path.join(out, "imu0", "data.csv")])]
+                ("splineimu allan OUT/mav0/imu0/data.csv",
+                 exe + ["allan", os.path.join(out, "mav0", "imu0", "data.csv")])]
         times = []
         for _, cmd in cmds:
             best = np.inf

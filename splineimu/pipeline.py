@@ -411,7 +411,8 @@ def _write_metadata(tmp, syn, rate_hz, rostopic):
     from .io.imu_yaml import kalibr_imu_chain_text
 
     cfg = syn.imu_config
-    header = None if cfg is not None else "noise-free synthesis: no sensor model was given (use --imu IMU.yaml or a preset)"
+    header = (None if cfg is not None
+              else "noise-free synthesis: no sensor model was given (use --imu IMU.yaml or a preset)")
     sampling = f"samples: {syn.sampling} (see report.json)"
     (cfg if cfg is not None else ImuConfig()).to_yaml(tmp / "imu.yaml", header=header, rostopic=rostopic,
                                                       update_rate=rate_hz)

@@ -489,7 +489,8 @@ def test_cli_scene_calibrate_and_read_back(tmp_path, capsys):
     assert _cli("calibrate", "gyro", rt / "mav0" / "imu0" / "data.csv", "-o", cal) == 1
     assert "already holds a gyroscope calibration" in capsys.readouterr().err
     assert (cal / "calibration.yaml").read_bytes() == before
-    assert _cli("calibrate", "gyro", rt / "mav0" / "imu0" / "data.csv", "-o", cal, "--force", "--tilt-sigma-deg", "0.5") == 0
+    assert _cli("calibrate", "gyro", rt / "mav0" / "imu0" / "data.csv", "-o", cal, "--force",
+                "--tilt-sigma-deg", "0.5") == 0
     assert "nominal" in capsys.readouterr().out
     # wrong data for the sensor: a one-line error, exit 1
     assert _cli("calibrate", "gyro", six / "mav0" / "imu0" / "data.csv") == 1

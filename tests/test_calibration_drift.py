@@ -145,7 +145,7 @@ def _scene(tmp_path, model, name="six-position", seed=3):
     imu.write_text(yaml.safe_dump(_config(model)))
     out = tmp_path / f"{name}-{model}"
     assert main(["scene", name, "-o", str(out), "--imu", str(imu), "--seed", str(seed)]) == 0
-    return out / "imu0" / "data.csv"
+    return out / "mav0" / "imu0" / "data.csv"
 
 
 def test_calibrate_file_is_the_command_library(tmp_path, capsys):

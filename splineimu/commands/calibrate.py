@@ -22,7 +22,7 @@ sensor-model keys (<sensor>_scale, <sensor>_misalignment with unit diagonal, <se
 the predicted standard deviations under the same keys; `calibration` the details (K, its
 covariance, the phases). Calibrating the other sensor into the same CAL adds to the file.
 When the data folder (OUT of `splineimu scene`) has an imu.yaml, the estimates are compared
-with it (and with the true biases of state_groundtruth_estimate0/data.csv).
+with it (and with the true biases of mav0/state_groundtruth_estimate0/data.csv).
 
 examples:
   splineimu scene six-position -o six --imu imu.yaml --seed 1

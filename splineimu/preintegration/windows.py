@@ -341,9 +341,8 @@ def evaluate_recording(folder, *, imu_csv=None, groundtruth=None, every=None, st
         Unreadable files.
     """
     from ..groundtruth import read_groundtruth
-    from ..io.imu_csv import read_imu_csv
-
     from ..io.dataset import GROUNDTRUTH_CSV, IMU_CSV, dataset_file, recorded_sampling
+    from ..io.imu_csv import read_imu_csv
 
     out = Path(folder)
     imu_path = Path(imu_csv) if imu_csv else dataset_file(out, IMU_CSV)
