@@ -268,7 +268,7 @@ def test_cli_integrate_round_trip(tmp_path, capsys):
     out = tmp_path / "rk4.tum"
     assert cli.main(["integrate", str(tmp_path / "out" / "imu0" / "data.csv"), "-o", str(out)]) == 0
     text = capsys.readouterr().out
-    assert "integrated 4001 samples (20.000 s) with rk4" in text
+    assert "integrated 4001 point samples (20.000 s) with rk4" in text
     stamps, vals = _read_tum_exact(out)
     np.testing.assert_array_equal(stamps, t_ns)  # exact, not through float seconds
     assert open(out).read().splitlines()[1].startswith("1403715523.912140001 ")
