@@ -15,7 +15,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from splineimu.camera import Camera, Landmarks, observe, write_features_csv
-from splineimu.camera.observe import frame_stamps_ns, observe_camera
+from splineimu.camera.observations import frame_stamps_ns, observe_camera
 from splineimu.motion import MotionSource
 from splineimu.scenes import make_scene
 
@@ -294,3 +294,18 @@ def test_importing_splineimu_does_not_load_the_camera_package():
             "splineimu.Spline; print(any(m.startswith('splineimu.camera') for m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
+
+
+@pytest.mark.parametrize("cam", [RADTAN, FISHEYE], ids=["radtan", "equidistant"])
+def test_row_bracket_kernel_agrees_with_numpy(scene, landmarks, cam):
+    from splineimu.camera import observations as ob
+
+    rows = np.linspace(0.0, cam.height, 7)
+    frame_s = np.linspace(0.2, 2.5, 9)
+    R, t = ob._cam_from_world(scene, cam.cam_T_imu, (frame_s[:, None] + rows * 4e-5).reshape(-1))
+    args = (cam, R.reshape(9, 7, 3, 3), t.reshape(9, 7, 3), landmarks.position_world, rows)
+    ref = ob._rs_brackets_numpy(*args)
+    got = ob._rs_brackets_kernel(*args)
+    assert ref[0].size > 50
+    for a, b in zip(ref, got):
+        np.testing.assert_allclose(b, a, rtol=1e-12, atol=1e-9)

@@ -17,7 +17,7 @@ from .camchain import load_camchain, write_camchain, write_openvins_imucam_chain
 from .features import read_features_csv, write_features_csv
 from .landmarks import Landmarks
 from .model import Camera
-from .observe import Observations, camera_rngs, frame_stamps_ns, observe, observe_camera
+from .observations import Observations, camera_rngs, frame_stamps_ns, observe, observe_camera
 from .plot import plot_frame
 
 __all__ = [

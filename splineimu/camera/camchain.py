@@ -290,6 +290,6 @@ def _flow(values) -> str:
 
 
 def _camera_list(cameras) -> list:
-    from .observe import _as_camera_list
+    from .observations import _as_camera_list
 
     return _as_camera_list(cameras)

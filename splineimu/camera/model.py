@@ -342,20 +342,19 @@ class Camera:
         c = self.distortion_coeffs
         if self.distortion_model == "equidistant":
             rho = np.hypot(X, Y)
-            if extended:
-                theta = np.arctan2(rho, Z)
-                with np.errstate(divide="ignore", invalid="ignore"):
-                    r = rho / Z
-            else:
-                with np.errstate(divide="ignore", invalid="ignore"):
-                    r = rho / Z
-                theta = np.arctan(r)
-            t2 = theta * theta
-            theta_d = theta * (1.0 + t2 * (c[0] + t2 * (c[1] + t2 * (c[2] + t2 * c[3]))))
-            small = np.abs(r) < SMALL_RADIUS
             with np.errstate(divide="ignore", invalid="ignore"):
+                if extended:
+                    theta = np.arctan2(rho, Z)
+                    small = rho < SMALL_RADIUS * Z  # never behind the camera
+                else:
+                    r = rho / Z
+                    theta = np.arctan(r)
+                    small = np.abs(r) < SMALL_RADIUS
+                t2 = theta * theta
+                theta_d = theta * (1.0 + t2 * (c[0] + t2 * (c[1] + t2 * (c[2] + t2 * c[3]))))
                 # (x_d, y_d) = theta_d (X, Y) / rho : the same as theta_d / r * (x, y) for Z > 0
-                scale = np.where(small, 0.0, theta_d / np.where(small, 1.0, rho))
+                flat = small | (rho == 0.0)
+                scale = np.where(flat, 0.0, theta_d / np.where(flat, 1.0, rho))
                 xd = np.where(small, X / Z, X * scale)
                 yd = np.where(small, Y / Z, Y * scale)
             return fu * xd + pu, fv * yd + pv

@@ -45,7 +45,7 @@ __all__ = ["observe", "observe_camera", "frame_stamps_ns", "Observations", "came
            "RS_SAMPLE_INTERVAL_S", "ROW_TOLERANCE_PX"]
 
 #: largest time between two rows at which the rolling-shutter residual is sampled [s]
-RS_SAMPLE_INTERVAL_S = 2e-3
+RS_SAMPLE_INTERVAL_S = 5e-3
 #: a rolling-shutter row is accepted when ``|proj_v(t(v)) - v|`` is below this [px]
 ROW_TOLERANCE_PX = 1e-7
 #: iteration limit of the row solver (it needs 3-6 in practice)
@@ -299,9 +299,15 @@ def _cam_from_world(source, cam_T_body, t_s):
 
     pos, quat = source.pose(np.ascontiguousarray(t_s, dtype=np.float64))
     world_R_body = quat_xyzw_to_matrix(quat)
-    cam_R_world = np.einsum("ij,nkj->nik", cam_T_body[:3, :3], world_R_body)
-    cam_t_world = cam_T_body[:3, 3] - np.einsum("nij,nj->ni", cam_R_world, pos)
+    cam_R_world = np.matmul(cam_T_body[:3, :3], world_R_body.transpose(0, 2, 1))
+    cam_t_world = cam_T_body[:3, 3] - _rotate(cam_R_world, pos)
     return cam_R_world, cam_t_world
+
+
+def _rotate(R, p):
+    """``R[n] @ p[n]`` for (N, 3, 3) and (N, 3): explicit sums (faster than batched matmul of 3x3)."""
+    x, y, z = p[:, 0], p[:, 1], p[:, 2]
+    return np.stack([R[:, i, 0] * x + R[:, i, 1] * y + R[:, i, 2] * z for i in range(3)], axis=1)
 
 
 def _global_shutter(source, camera, cam_T_body, points, frame_s, frame0):
@@ -316,45 +322,73 @@ def _global_shutter(source, camera, cam_T_body, points, frame_s, frame0):
 
 def _rolling_shutter(source, camera, cam_T_body, points, frame_s, frame0, rows):
     ld = camera.line_delay_s
-    nf, ns = frame_s.size, rows.size
     t = (frame_s[:, None] + rows[None, :] * ld).reshape(-1)
     R, tr = _cam_from_world(source, cam_T_body, t)
-    p = (np.matmul(points[None], R.transpose(0, 2, 1)) + tr[:, None, :]).reshape(nf, ns, -1, 3)
-    _, v = camera._project_xyz(p[..., 0], p[..., 1], p[..., 2], extended=True)
-    front = p[..., 2] > 0.0
-    res = v - rows[None, :, None]  # (F, S, M)
-    a, b = res[:, :-1], res[:, 1:]
-    bracket = ((a >= 0) & (b < 0)) | ((a < 0) & (b >= 0))
-    bracket &= front[:, :-1] | front[:, 1:]
-    f, s, m = np.nonzero(bracket)
-    row_lo, row_hi = rows[s], rows[s + 1]
-    res_lo, res_hi = res[f, s, m], res[f, s + 1, m]
-    row, ok = _solve_rows(source, camera, cam_T_body, points, frame_s, f, m, row_lo, row_hi, res_lo, res_hi)
-    f, m, row = f[ok], m[ok], row[ok]
+    R = R.reshape(frame_s.size, rows.size, 3, 3)
+    tr = tr.reshape(frame_s.size, rows.size, 3)
+    find = _rs_brackets_numpy if _jit_disabled() else _rs_brackets_kernel
+    f, s, m, res_lo, res_hi = find(camera, R, tr, points, rows)
+    row, u, v, z, ok = _solve_rows(source, camera, cam_T_body, points, frame_s, f, m,
+                                   rows[s], rows[s + 1], res_lo, res_hi)
+    keep = ok & (z > 0.0) & camera.in_image(u, v)
+    f, m, u, v, row = f[keep], m[keep], u[keep], v[keep], row[keep]
     tc = frame_s[f] + row * ld
-    Rc, tcw = _cam_from_world(source, cam_T_body, tc)
-    pc = np.einsum("nij,nj->ni", Rc, points[m]) + tcw
-    u, v = camera._project_xyz(pc[:, 0], pc[:, 1], pc[:, 2], extended=False)
-    keep = (pc[:, 2] > 0.0) & camera.in_image(u, v) & (np.abs(v - row) <= ROW_TOLERANCE_PX * 10)
-    f, m, u, v, tc = f[keep], m[keep], u[keep], v[keep], tc[keep]
-    # several roots of one landmark in one frame: keep the topmost (np.nonzero gave them by s)
+    # several roots of one landmark in one frame: keep the topmost
     order = np.lexsort((v, m, f))
     f, m, u, v, tc = f[order], m[order], u[order], v[order], tc[order]
     first = np.ones(f.size, dtype=bool)
     first[1:] = (f[1:] != f[:-1]) | (m[1:] != m[:-1])
-    f, m, u, v, tc = f[first], m[first], u[first], v[first], tc[first]
-    return f + frame0, m, u, v, tc
+    return f[first] + frame0, m[first], u[first], v[first], tc[first]
+
+
+def _rs_brackets_numpy(camera, R, t, points, rows):
+    """Row brackets ``(frame, sample, landmark, residual at sample, at sample + 1)`` where the
+    residual changes sign with positive depth at one end at least (the reference of the kernel)."""
+    p = np.matmul(points[None, None], R.transpose(0, 1, 3, 2)) + t[:, :, None, :]  # (F, S, M, 3)
+    _, v = camera._project_xyz(p[..., 0], p[..., 1], p[..., 2], extended=True)
+    front = p[..., 2] > 0.0
+    res = v - rows[None, :, None]
+    a, b = res[:, :-1], res[:, 1:]
+    bracket = ((a >= 0) & (b < 0)) | ((a < 0) & (b >= 0))
+    bracket &= front[:, :-1] | front[:, 1:]
+    f, m, s = np.nonzero(bracket.transpose(0, 2, 1))  # ordered by frame, landmark, sample
+    return f, s, m, res[f, s, m], res[f, s + 1, m]
+
+
+def _rs_brackets_kernel(camera, R, t, points, rows):
+    from . import _kernels as _k
+
+    code = {"none": _k.MODEL_NONE, "radtan": _k.MODEL_RADTAN, "equidistant": _k.MODEL_EQUIDISTANT}
+    k = np.zeros(8)
+    k[:4] = camera.intrinsics
+    k[4:4 + len(camera.distortion_coeffs)] = camera.distortion_coeffs
+    args = (np.ascontiguousarray(R), np.ascontiguousarray(t), np.ascontiguousarray(points), rows,
+            code[camera.distortion_model], k)
+    cap = max(1024, 2 * R.shape[0] * points.shape[0])
+    while True:
+        out = (np.empty(cap, np.int64), np.empty(cap, np.int64), np.empty(cap, np.int64), np.empty(cap), np.empty(cap))
+        n = _k.rs_brackets(*args, *out)
+        if n <= cap:
+            return tuple(x[:n] for x in out)
+        cap = n
+
+
+def _jit_disabled() -> bool:
+    import numba
+
+    return bool(numba.config.DISABLE_JIT)
 
 
 def _solve_rows(source, camera, cam_T_body, points, frame_s, f, m, a, b, fa, fb):
     """Illinois iteration on ``g(row) = proj_v(t(row)) - row`` in the brackets ``[a, b]``.
 
-    Returns ``(row, converged)``; a bracket around a jump (zero depth of a pinhole camera)
-    does not converge to a small residual and is reported as not converged.
+    Returns ``(row, u, v, depth, converged)``, the last four at the solution. A bracket around
+    a jump (zero depth of a pinhole camera) does not converge to a small residual and is
+    reported as not converged.
     """
     ld = camera.line_delay_s
     n = f.size
-    row = np.empty(n)
+    row, u, v, z = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n)
     done = np.zeros(n, dtype=bool)
     a, b, fa, fb = (np.array(x, dtype=np.float64) for x in (a, b, fa, fb))
     active = np.arange(n)
@@ -368,25 +402,25 @@ def _solve_rows(source, camera, cam_T_body, points, frame_s, f, m, a, b, fa, fb)
             c = np.where(finite, (aa * fb_ - bb * fa_) / (fb_ - fa_), 0.5 * (aa + bb))
         c = np.clip(c, np.minimum(aa, bb), np.maximum(aa, bb))
         R, tr = _cam_from_world(source, cam_T_body, frame_s[f[active]] + c * ld)
-        p = np.einsum("nij,nj->ni", R, points[m[active]]) + tr
-        _, vc = camera._project_xyz(p[:, 0], p[:, 1], p[:, 2], extended=True)
+        p = _rotate(R, points[m[active]]) + tr
+        uc, vc = camera._project_xyz(p[:, 0], p[:, 1], p[:, 2], extended=True)
         fc = vc - c
         conv = np.abs(fc) <= ROW_TOLERANCE_PX
         stuck = np.abs(bb - aa) <= 1e-12 * max(1.0, float(camera.height))
-        row[active[conv]] = c[conv]
-        done[active[conv]] = True
+        hit = active[conv]
+        row[hit], u[hit], v[hit], z[hit] = c[conv], uc[conv], vc[conv], p[conv, 2]
+        done[hit] = True
         # The new point c becomes b; a is the end kept (the old a when c has b's sign, else
         # the old b). Keeping the old a means keeping one end twice in a row after the first
         # step (Illinois): halve its residual so that the next secant moves past the root.
         same_as_b = np.signbit(fc) == np.signbit(fb_)
-        idx = active
         new_a = np.where(same_as_b, aa, bb)
         new_fa = np.where(same_as_b, fa_, fb_)
-        new_fa = np.where(same_as_b & (started[idx]), new_fa * 0.5, new_fa)
-        started[idx] = True
-        a[idx], fa[idx], b[idx], fb[idx] = new_a, new_fa, c, fc
+        new_fa = np.where(same_as_b & started[active], new_fa * 0.5, new_fa)
+        started[active] = True
+        a[active], fa[active], b[active], fb[active] = new_a, new_fa, c, fc
         active = active[~conv & ~stuck & np.isfinite(c)]
-    return row, done
+    return row, u, v, z, done
 
 
 # ------------------------------------------------------------------------------ argument helpers
