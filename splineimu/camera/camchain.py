@@ -162,7 +162,19 @@ def camchain_dict(cameras, observations=None) -> dict:
 
 
 def cam_overlaps(cameras, observations) -> list:
-    """For each camera, the indices of the other cameras that observed a common landmark."""
+    """For each camera, the indices of the other cameras that observed a common landmark.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace
+    >>> cams = [Camera((1.0, 1.0, 0.0, 0.0), (4, 4), name=f"cam{i}") for i in range(3)]
+    >>> obs = {"cam0": SimpleNamespace(landmark_id=[1, 2]), "cam1": SimpleNamespace(landmark_id=[2, 5]),
+    ...        "cam2": SimpleNamespace(landmark_id=[7])}
+    >>> cam_overlaps(cams, obs)
+    [[1], [0], []]
+    >>> cam_overlaps(cams[:1], {})
+    [[]]
+    """
     import numpy as np
 
     cams = _camera_list(cameras)

@@ -326,7 +326,16 @@ class Camera:
         return (p[..., 2] > 0.0) & self.in_image(uv[..., 0], uv[..., 1])
 
     def in_image(self, u, v) -> np.ndarray:
-        """``0 <= u < width and 0 <= v < height`` (Kalibr's rule)."""
+        """``0 <= u < width and 0 <= v < height`` (Kalibr's rule).
+
+        Examples
+        --------
+        >>> cam = Camera((1.0, 1.0, 0.0, 0.0), (640, 480))
+        >>> cam.in_image(np.array([0.0, 639.9, 640.0]), np.array([0.0, 479.9, 10.0]))
+        array([ True,  True, False])
+        >>> bool(cam.in_image(-1e-9, 5.0))
+        False
+        """
         return (u >= 0.0) & (u < self.width) & (v >= 0.0) & (v < self.height)
 
     def _project_xyz(self, X, Y, Z, extended: bool):

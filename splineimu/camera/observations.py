@@ -77,6 +77,18 @@ class Observations:
         was imaged: the frame start plus ``v_exact * line_delay_s``.
 
     Rows are ordered by frame, then by the landmarks' order.
+
+    Examples
+    --------
+    >>> from splineimu.scenes import make_scene
+    >>> scene = make_scene("ellipse", duration_s=0.2)
+    >>> cam = Camera((300.0, 300.0, 320.0, 240.0), (640, 480), rate_hz=10.0, pixel_noise_px=0.5,
+    ...              cam_T_imu=[[0, -1, 0, 0], [0, 0, -1, 0], [1, 0, 0, 0], [0, 0, 0, 1]])
+    >>> obs = observe_camera(scene, cam, Landmarks.random(200, source=scene, rng=0), rng=1)
+    >>> obs.frame_t_ns.tolist(), len(obs.frame(100_000_000)) == int(np.sum(obs.t_ns == 100_000_000))
+    ([0, 100000000, 200000000], True)
+    >>> list(obs.to_dataframe().columns)
+    ['t_ns', 'landmark_id', 'u', 'v', 'u_exact', 'v_exact', 't_capture_s']
     """
 
     camera: Camera
@@ -157,7 +169,20 @@ def observe(source, cameras, landmarks, rng=None, *, body_T_imu=None) -> dict:
 
 
 def observe_camera(source, camera: Camera, landmarks: Landmarks, rng=None, *, body_T_imu=None) -> Observations:
-    """Observations of one camera; see :func:`observe` (``rng`` is used as given).
+    """Observations of one camera; see :func:`observe`.
+
+    Parameters
+    ----------
+    source : MotionSource
+    camera : Camera
+    landmarks : Landmarks or array_like (M, 3)
+    rng : numpy.random.Generator, int or None
+        Used as given (no child stream is derived, unlike :func:`observe`).
+    body_T_imu : (4, 4) array_like, optional
+
+    Returns
+    -------
+    Observations
 
     Examples
     --------
@@ -212,6 +237,9 @@ def frame_stamps_ns(source, camera: Camera) -> np.ndarray:
     >>> cam = Camera((1.0, 1.0, 0.0, 0.0), (10, 10), rate_hz=3.0, timeshift_cam_imu_s=0.25)
     >>> frame_stamps_ns(scene, cam).tolist()  # t_imu = t_cam + 0.25 s must lie in [0, 1] s
     [-250000000, 83333333, 416666667, 750000000]
+    >>> rs = Camera((1.0, 1.0, 0.0, 0.0), (10, 1000), rate_hz=4.0, line_delay_s=1e-4)
+    >>> frame_stamps_ns(scene, rs).tolist()  # the last frame's rows end by 0.75 + 0.1 s
+    [0, 250000000, 500000000, 750000000]
     """
     origin = int(source.origin_ns)
     t_min, t_max = float(source.t_min_s), float(source.t_max_s)
