@@ -309,3 +309,11 @@ def test_row_bracket_kernel_agrees_with_numpy(scene, landmarks, cam):
     assert ref[0].size > 50
     for a, b in zip(ref, got):
         np.testing.assert_allclose(b, a, rtol=1e-12, atol=1e-9)
+
+
+def test_unix_epoch_origin_shifts_the_stamps_only(landmarks):
+    origin = 1403715524907143168  # EuRoC: beyond float64's exact integers
+    a = observe_camera(make_scene("ellipse", duration_s=1.0), RADTAN, landmarks, rng=1)
+    b = observe_camera(make_scene("ellipse", duration_s=1.0, t0_ns=origin), RADTAN, landmarks, rng=1)
+    assert np.array_equal(b.frame_t_ns - origin, a.frame_t_ns) and np.array_equal(b.t_ns - origin, a.t_ns)
+    assert np.array_equal(a.u, b.u) and np.array_equal(a.landmark_id, b.landmark_id)

@@ -88,6 +88,9 @@ class Camera:
         (x_d, y_d) = (theta_d / r) (x, y)      (1 when r < 1e-8)
 
     then ``u = fu x_d + pu``, ``v = fv y_d + pv``. A point is observable only with ``Z > 0``.
+    The visibility rule is literal, as Kalibr's: a radtan model whose radial factor turns
+    back (strongly negative ``k1`` with ``k2 <= 0``) maps some points far outside the field of
+    view back into the image, and they count as visible, exactly where OpenCV projects them.
 
     References
     ----------

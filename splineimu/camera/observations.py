@@ -198,7 +198,7 @@ def observe_camera(source, camera: Camera, landmarks: Landmarks, rng=None, *, bo
     """
     lm = landmarks if isinstance(landmarks, Landmarks) else _landmarks_from_array(landmarks)
     gen = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
-    body_T_imu = _as_transform(body_T_imu) if not isinstance(body_T_imu, np.ndarray) else body_T_imu
+    body_T_imu = _as_transform(body_T_imu)
     cam_T_body = camera.cam_T_imu @ _inverse(body_T_imu)
     frames_ns = frame_stamps_ns(source, camera)
     frame_s = _frame_times_s(source, camera, frames_ns)
