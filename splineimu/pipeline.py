@@ -18,23 +18,7 @@ from . import __version__
 from .errors import SplineImuError
 from .imu.ideal import Extrinsic, IdealImu, ideal_imu
 from .motion import DEFAULT_GRAVITY, MotionSource
-
-
-def uniform_stamps_ns(start_ns: int, end_ns: int, rate_hz: float) -> np.ndarray:
-    """Integer-nanosecond stamps ``start + round(k 1e9 / rate)`` that lie in [start, end]."""
-    rate_hz = float(rate_hz)
-    if not (np.isfinite(rate_hz) and rate_hz > 0):
-        raise SplineImuError(f"rate must be positive, got {rate_hz}")
-    span = int(end_ns) - int(start_ns)
-    if span < 0:
-        raise SplineImuError("empty time span")
-    n = int(np.floor(span * rate_hz / 1e9 + 1e-9)) + 1
-    k = np.arange(n, dtype=np.int64)
-    if (1e9 / rate_hz).is_integer():
-        off = k * np.int64(int(1e9 / rate_hz))
-    else:
-        off = np.round(k.astype(np.float64) * (1e9 / rate_hz)).astype(np.int64)
-    return np.int64(start_ns) + off[off <= span]
+from .timegrid import uniform_stamps_ns  # noqa: F401 (re-exported for the commands)
 
 
 @dataclass

@@ -337,15 +337,9 @@ class Scene(MotionSource):
         ``k = 0, 1, ...`` while the stamp is within ``duration_s`` (both ends included when the
         duration is a whole number of periods). Integer rates use exact integer arithmetic.
         """
-        rate = _as_rate(rate_hz)
-        n = int(math.floor(self.duration_s * rate * (1.0 + 1e-12) + 1e-9)) + 1
-        k = np.arange(n, dtype=np.int64)
-        if rate == int(rate):
-            r = int(rate)
-            rel = (2 * k * 1_000_000_000 + r) // (2 * r)
-        else:
-            rel = np.rint(k * (1e9 / rate)).astype(np.int64)
-        return np.int64(self.origin_ns) + rel
+        from .timegrid import uniform_stamps_ns
+
+        return uniform_stamps_ns(self.origin_ns, self.origin_ns + int(round(self.duration_s * 1e9)), _as_rate(rate_hz))
 
     def describe(self) -> dict:
         """JSON-friendly summary: name, duration, origin and parameters (with units)."""

@@ -150,7 +150,7 @@ def test_validation_messages(d, match):
 def test_error_names_the_source_and_yaml_line(tmp_path):
     p = tmp_path / "imu.yaml"
     p.write_text("gyroscope_noise_density: 1e-4\ngyroscope_random_walk: [1, 2\n")
-    with pytest.raises(ConfigError, match=r"imu\.yaml:\d+: invalid yaml"):
+    with pytest.raises(ConfigError, match=r"imu\.yaml:\d+: invalid YAML"):
         ImuConfig.from_yaml(p)
     p.write_text("gyroscope_noise_densty: 1e-4\n")
     with pytest.raises(ConfigError, match=r"^.*imu\.yaml: unknown IMU key"):

@@ -571,27 +571,9 @@ class ImuConfig:
 
 
 def _parse_yaml(text: str, name: str):
-    import yaml
+    from ..io.yaml import parse_yaml
 
-    # OpenCV's "%YAML:1.0" directive is not YAML; drop it (keep the line count for messages)
-    text = re.sub(r"\A(\s*)%YAML:[^\n]*", r"\1", text)
-
-    class _Loader(yaml.SafeLoader):
-        pass
-
-    def _opencv_matrix(loader, node):
-        return loader.construct_mapping(node, deep=True)
-
-    _Loader.add_constructor("tag:yaml.org,2002:opencv-matrix", _opencv_matrix)
-    try:
-        d = yaml.load(text, Loader=_Loader)  # noqa: S506 (SafeLoader subclass)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        line = f":{mark.line + 1}" if mark is not None else ""
-        problem = getattr(exc, "problem", None) or str(exc)
-        raise ConfigError(f"{name}{line}: invalid yaml: {problem}") from None
-    if d is None:
-        d = {}
+    d = parse_yaml(text, name).data
     if not isinstance(d, dict):
         raise ConfigError(f"{name}: expected a mapping of IMU parameters, got {type(d).__name__}")
     return d
@@ -616,33 +598,9 @@ def _unwrap_chain(d: dict, where: str) -> dict:
 
 def write_yaml_atomic(path, data: dict, comment_lines=()) -> Path:
     """Dump ``data`` as block-style yaml (short lists inline) to ``path`` atomically."""
-    import yaml
+    from ..io.yaml import write_yaml
 
-    path = Path(path)
-
-    class _Dumper(yaml.SafeDumper):
-        pass
-
-    def _repr_list(dumper, value):
-        flat = all(not isinstance(v, (list, dict)) for v in value)
-        return dumper.represent_sequence("tag:yaml.org,2002:seq", value, flow_style=flat or
-                                         all(isinstance(v, list) and len(v) <= 3 for v in value))
-
-    def _repr_float(dumper, value):
-        if math.isinf(value):
-            return dumper.represent_scalar("tag:yaml.org,2002:float", ".inf" if value > 0 else "-.inf")
-        if math.isnan(value):
-            return dumper.represent_scalar("tag:yaml.org,2002:float", ".nan")
-        return dumper.represent_scalar("tag:yaml.org,2002:float", repr(float(value)))
-
-    _Dumper.add_representer(list, _repr_list)
-    _Dumper.add_representer(float, _repr_float)
-    body = yaml.dump(data, Dumper=_Dumper, sort_keys=False, default_flow_style=False, width=110)
-    text = "".join(c + "\n" for c in comment_lines) + body
-    path.parent.mkdir(parents=True, exist_ok=True)
-    from ..io.output import atomic_write_text
-
-    return atomic_write_text(path, text)  # (mode 0666 & ~umask, like any other output file)
+    return write_yaml(path, data, comment_lines)
 
 
 # ------------------------------------------------------------------------------ presets
