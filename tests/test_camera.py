@@ -109,7 +109,8 @@ def test_openvins_T_imu_cam_and_kalibr_line_delay_are_accepted():
     ({"intrinsics": [1.0, 2.0, 3.0]}, "`intrinsics` must be .*4 values, got 3"),
     ({"intrinsics": [-1.0, 2.0, 3.0, 4.0]}, "focal lengths"),
     ({"intrinsics": [1.0, "a", 3.0, 4.0]}, "`intrinsics` must be a number"),
-    ({"resolution": [752.5, 480]}, "`resolution` must be two positive whole numbers"),
+    ({"resolution": [752.5, 480]}, "`resolution` must be an integer, got 752.5"),
+    ({"resolution": [0, 480]}, "`resolution` must be >= 1, got 0"),
     ({"resolution": [752]}, r"`resolution` must be \[width, height\]"),
     ({"distortion_model": "radial"}, "`distortion_model` must be one of radtan, equidistant, none"),
     ({"distortion_coeffs": [0.1, 0.2]}, "`distortion_coeffs` must be 4 numbers for radtan"),
@@ -187,18 +188,22 @@ def test_openvins_chain_is_read_by_opencv_filestorage(tmp_path):
     assert np.abs(back["cam1"].cam_T_imu - cams[1].cam_T_imu).max() < 1e-12
 
 
-def test_camchain_file_errors_name_the_file(tmp_path):
+def test_camchain_file_errors_name_the_file_and_line(tmp_path):
     p = tmp_path / "bad.yaml"
     p.write_text("cam0:\n  intrinsics: [1, 1, 0, 0]\n  resolution: [4, 4]\n  rate_hz: 0\n")
-    with pytest.raises(ConfigError, match="bad.yaml: cam0: `rate_hz` must be positive"):
+    with pytest.raises(ConfigError, match="bad.yaml:4: cam0: `rate_hz` must be positive") as info:
+        load_camchain(p)
+    assert info.value.line == 4 and info.value.option == "cam0.rate_hz"
+    p.write_text("cam0:\n  intrinsics: [1, 1, 0, 0]\n  resolution: [4, 4]\n")
+    with pytest.raises(ConfigError, match="bad.yaml:1: cam0: missing key `rate_hz`"):
         load_camchain(p)
     p.write_text("imu0: {}\n")
     with pytest.raises(ConfigError, match="camera names must be cam0, cam1"):
         load_camchain(p)
     p.write_text("cam0: [1, 2\n")
-    with pytest.raises(InputError, match="invalid yaml"):
+    with pytest.raises(ConfigError, match="invalid YAML"):
         load_camchain(p)
-    with pytest.raises(InputError, match="cannot read camchain"):
+    with pytest.raises(ConfigError, match="camchain not found"):
         load_camchain(tmp_path / "missing.yaml")
 
 

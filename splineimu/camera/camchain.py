@@ -16,8 +16,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from ..errors import ConfigError, InputError
-from ._files import atomic_write_text
+from ..errors import ConfigError
 from .model import Camera
 
 __all__ = ["load_camchain", "cameras_from_kalibr", "write_camchain", "write_openvins_imucam_chain",
@@ -26,7 +25,7 @@ __all__ = ["load_camchain", "cameras_from_kalibr", "write_camchain", "write_open
 _CAM_KEY = re.compile(r"cam(\d+)")
 
 
-def cameras_from_kalibr(mapping, defaults=None, where: str = "") -> dict:
+def cameras_from_kalibr(mapping, defaults=None, *, doc=None, keys=()) -> dict:
     """Cameras from a mapping ``{cam0: {...}, cam1: {...}}`` of Kalibr keys.
 
     Parameters
@@ -36,8 +35,11 @@ def cameras_from_kalibr(mapping, defaults=None, where: str = "") -> dict:
         ``cam<N>``; cameras are returned in the order of ``N``.
     defaults : dict, optional
         Keys used for every camera that lacks them (e.g. ``{"rate_hz": 20.0}``).
-    where : str
-        Prefix for messages (a file name).
+    doc : splineimu.io.yaml.YamlDoc, optional
+        The document ``mapping`` was read from: errors then carry its file and the line of
+        the key at fault.
+    keys : tuple of str
+        Where ``mapping`` sits in ``doc`` (e.g. ``("cameras",)`` in a scene file).
 
     Returns
     -------
@@ -56,27 +58,42 @@ def cameras_from_kalibr(mapping, defaults=None, where: str = "") -> dict:
     ...                            defaults={"rate_hz": 10})
     >>> list(cams), cams["cam1"].intrinsics
     (['cam0', 'cam1'], (1.0, 1.0, 0.0, 0.0))
+    >>> from splineimu.io.yaml import parse_yaml
+    >>> doc = parse_yaml("cameras:\\n  cam0:\\n    intrinsics: [1, 1, 0, 0]\\n    resolution: [4, 4]\\n"
+    ...                  "    rate_hz: -20\\n", "scene.yaml")
+    >>> cameras_from_kalibr(doc.data["cameras"], doc=doc, keys=("cameras",))
+    Traceback (most recent call last):
+    ...
+    splineimu.errors.ConfigError: scene.yaml:5: cam0: `rate_hz` must be positive, got -20
     """
-    prefix = f"{where}: " if where else ""
+    keys = tuple(keys)
+
+    def fail(message, *at):
+        if doc is None:
+            return ConfigError(message, option=".".join(map(str, at)) or None)
+        return ConfigError(message, path=doc.name, line=doc.line(*keys, *at),
+                           option=".".join(map(str, keys + at)) or None)
+
     if not isinstance(mapping, dict) or not mapping:
-        raise ConfigError(f"{prefix}expected a mapping cam0: {{...}}, cam1: {{...}}, got {mapping!r}")
+        raise fail(f"expected a mapping cam0: {{...}}, cam1: {{...}}, got {mapping!r}")
     names = []
     for key in mapping:
         if not isinstance(key, str) or not _CAM_KEY.fullmatch(key):
-            raise ConfigError(f"{prefix}camera names must be cam0, cam1, ...; got {key!r}")
+            raise fail(f"camera names must be cam0, cam1, ...; got {key!r}", key)
         names.append(key)
     names.sort(key=lambda k: int(k[3:]))
     out = {}
     for name in names:
         entry = mapping[name]
         if not isinstance(entry, dict):
-            raise ConfigError(f"{prefix}{name}: expected a mapping of Kalibr camera keys, got {entry!r}")
+            raise fail(f"{name}: expected a mapping of Kalibr camera keys, got {entry!r}", name)
         merged = dict(defaults or {})
         merged.update(entry)
         try:
             out[name] = Camera.from_kalibr(merged, name=name)
         except ConfigError as exc:
-            raise ConfigError(f"{prefix}{exc}") from None
+            at = (name,) if exc.option is None or exc.option not in entry else (name, exc.option)
+            raise fail(exc.problem, *at) from None
     return out
 
 
@@ -97,10 +114,9 @@ def load_camchain(path, defaults=None) -> dict:
 
     Raises
     ------
-    InputError
-        The file cannot be read or is not valid yaml.
     ConfigError
-        A bad camera entry (the message names the file, the camera and the key).
+        The file cannot be read, is not valid yaml, or has a bad camera entry (the message
+        starts with the file and the line of the key at fault).
 
     Examples
     --------
@@ -113,21 +129,10 @@ def load_camchain(path, defaults=None) -> dict:
     >>> cams["cam0"].distortion_coeffs, cams["cam0"].timeshift_cam_imu_s
     ((-0.1, 0.01, 0.0, 0.0), -0.002)
     """
-    import yaml
+    from ..io.yaml import read_yaml
 
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise InputError(f"cannot read camchain: {exc.strerror or exc}", path=path) from None
-    text = re.sub(r"\A(\s*)%YAML:[^\n]*", r"\1", text)  # OpenCV's directive is not YAML
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        raise InputError(f"invalid yaml: {getattr(exc, 'problem', None) or exc}", path=path,
-                         line=None if mark is None else mark.line + 1) from None
-    return cameras_from_kalibr(data, defaults=defaults, where=str(path))
+    doc = read_yaml(path, "camchain")
+    return cameras_from_kalibr(doc.data, defaults=defaults, doc=doc)
 
 
 def camchain_dict(cameras, observations=None) -> dict:
@@ -215,9 +220,12 @@ def write_camchain(path, cameras, observations=None) -> Path:
     """
     import yaml
 
+    from ..io.yaml import write_yaml
+
     data = camchain_dict(cameras, observations)
+    # PyYAML's own float representer (not io.yaml's): `1.0e-05`, which every PyYAML reads as a float
     text = yaml.safe_dump(data, default_flow_style=None, width=2147483647, sort_keys=True)
-    return atomic_write_text(path, text)
+    return write_yaml(path, None, text=text)
 
 
 def write_openvins_imucam_chain(path, cameras, observations=None) -> Path:
@@ -285,7 +293,9 @@ def write_openvins_imucam_chain(path, cameras, observations=None) -> Path:
         lines.append(f"  rostopic: {cam.topic}")
         lines.append(f"  timeshift_cam_imu: {_real(cam.timeshift_cam_imu_s)}")
         lines.append("")
-    return atomic_write_text(path, "\n".join(lines) + "\n")
+    from ..io.yaml import write_yaml
+
+    return write_yaml(path, None, text="\n".join(lines) + "\n")
 
 
 def _real(x) -> str:

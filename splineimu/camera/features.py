@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
-from ._files import atomic_write_text
+from ..io.output import atomic_write_text
 
 __all__ = ["write_features_csv", "read_features_csv", "FEATURES_HEADER"]
 

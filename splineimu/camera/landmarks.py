@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ConfigError, InputError
-from ._files import atomic_write_text
+from ..io.output import atomic_write_text
 
 __all__ = ["Landmarks", "SHAPES"]
 

@@ -20,12 +20,12 @@ Conventions
 from __future__ import annotations
 
 import difflib
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..errors import ConfigError
+from ..validation import as_rate_hz, finite_float, int_in_range, nonnegative_float, one_of
 
 __all__ = ["Camera", "DISTORTION_MODELS", "CAMERA_KEYS"]
 
@@ -124,30 +124,21 @@ class Camera:
         set_ = object.__setattr__
         set_(self, "intrinsics", _numbers(self.intrinsics, 4, "intrinsics", where, "[fu, fv, pu, pv]"))
         if self.intrinsics[0] <= 0 or self.intrinsics[1] <= 0:
-            raise ConfigError(f"{where}`intrinsics` focal lengths fu, fv must be positive, got "
-                              f"{list(self.intrinsics[:2])}")
+            raise _error(where, "intrinsics", f"`intrinsics` focal lengths fu, fv must be positive, got "
+                                              f"{list(self.intrinsics[:2])}")
         set_(self, "resolution", _resolution(self.resolution, where))
-        model = self.distortion_model
-        if model not in DISTORTION_MODELS:
-            raise ConfigError(f"{where}`distortion_model` must be one of {', '.join(DISTORTION_MODELS)}, "
-                              f"got {model!r}{_did_you_mean(model, DISTORTION_MODELS)}")
+        model = _check(one_of, self.distortion_model, "distortion_model", where, tuple(DISTORTION_MODELS))
         n = DISTORTION_MODELS[model]
         coeffs = () if self.distortion_coeffs is None else self.distortion_coeffs
         set_(self, "distortion_coeffs", _numbers(coeffs, n, "distortion_coeffs", where,
                                                  f"{n} numbers for {model}"))
         set_(self, "cam_T_imu", _transform(self.cam_T_imu, "T_cam_imu", where))
-        set_(self, "timeshift_cam_imu_s", _finite(self.timeshift_cam_imu_s, "timeshift_cam_imu", where))
-        rate = _finite(self.rate_hz, "rate_hz", where)
-        if rate <= 0:
-            raise ConfigError(f"{where}`rate_hz` must be positive, got {rate!r}")
-        set_(self, "rate_hz", rate)
-        for key, attr in (("line_delay_s", "line_delay_s"), ("pixel_noise_px", "pixel_noise_px")):
-            val = _finite(getattr(self, attr), key, where)
-            if val < 0:
-                raise ConfigError(f"{where}`{key}` must be zero or positive, got {val!r}")
-            set_(self, attr, val)
+        set_(self, "timeshift_cam_imu_s", _check(finite_float, self.timeshift_cam_imu_s, "timeshift_cam_imu", where))
+        set_(self, "rate_hz", _check(as_rate_hz, self.rate_hz, "rate_hz", where))
+        set_(self, "line_delay_s", _check(nonnegative_float, self.line_delay_s, "line_delay_s", where))
+        set_(self, "pixel_noise_px", _check(nonnegative_float, self.pixel_noise_px, "pixel_noise_px", where))
         if self.rostopic is not None and not isinstance(self.rostopic, str):
-            raise ConfigError(f"{where}`rostopic` must be a string, got {self.rostopic!r}")
+            raise _error(where, "rostopic", f"`rostopic` must be a string, got {self.rostopic!r}")
 
     # ------------------------------------------------------------------ construction
     @classmethod
@@ -194,28 +185,29 @@ class Camera:
         """
         where = f"{name}: "
         if not isinstance(mapping, dict):
-            raise ConfigError(f"{where}expected a mapping of Kalibr camera keys, got {type(mapping).__name__}")
+            raise _error(where, None, f"expected a mapping of Kalibr camera keys, got {type(mapping).__name__}")
         d = dict(mapping)
         d.update(overrides)
         for key in d:
             if key not in CAMERA_KEYS:
-                raise ConfigError(f"{where}unknown key `{key}`{_did_you_mean(key, CAMERA_KEYS, '; did you mean')}")
+                raise _error(where, key, f"unknown key `{key}`{_did_you_mean(key, CAMERA_KEYS, '; did you mean')}")
         model = d.get("camera_model", "pinhole")
         if model != "pinhole":
-            raise ConfigError(f"{where}`camera_model` must be pinhole, got {model!r}")
+            raise _error(where, "camera_model", f"`camera_model` must be pinhole, got {model!r}")
         for key in ("intrinsics", "resolution", "rate_hz"):
             if key not in d:
                 hint = " (Kalibr files have no frame rate: give it next to the file)" if key == "rate_hz" else ""
-                raise ConfigError(f"{where}missing key `{key}`{hint}")
+                raise _error(where, None, f"missing key `{key}`{hint}")
         dist = d.get("distortion_model", "none")
         if not isinstance(dist, str):
-            raise ConfigError(f"{where}`distortion_model` must be a string, got {dist!r}")
+            raise _error(where, "distortion_model", f"`distortion_model` must be a string, got {dist!r}")
         cam_T_imu = _from_either(d, where)
         line_delay = d.get("line_delay_s", None)
         if "line_delay" in d:
-            kalibr = _finite(d["line_delay"], "line_delay", where)
-            if line_delay is not None and _finite(line_delay, "line_delay_s", where) != kalibr:
-                raise ConfigError(f"{where}`line_delay` ({kalibr!r}) and `line_delay_s` ({line_delay!r}) differ")
+            kalibr = _check(nonnegative_float, d["line_delay"], "line_delay", where)
+            if line_delay is not None and _check(finite_float, line_delay, "line_delay_s", where) != kalibr:
+                raise _error(where, "line_delay",
+                             f"`line_delay` ({kalibr!r}) and `line_delay_s` ({line_delay!r}) differ")
             line_delay = kalibr
         return cls(
             intrinsics=d["intrinsics"], resolution=d["resolution"], distortion_model=dist,
@@ -402,53 +394,51 @@ def _did_you_mean(word, choices, prefix=""):
     return f"{prefix} `{close[0]}`?" if prefix else f" (did you mean {close[0]!r}?)"
 
 
-def _finite(value, key, where) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise ConfigError(f"{where}`{key}` must be a number, got {value!r}")
-    f = float(value)
-    if not math.isfinite(f):
-        raise ConfigError(f"{where}`{key}` must be finite, got {value!r}")
-    return f
+def _error(where, key, message) -> ConfigError:
+    """A :class:`ConfigError` about camera key ``key``; ``option`` carries the key so that a
+    file reader can add the key's file and line."""
+    return ConfigError(where + message, option=key)
+
+
+def _check(check, value, key, where, *args):
+    """``check(value, key, *args)`` from :mod:`splineimu.validation`, its message prefixed by the camera."""
+    try:
+        return check(value, key, *args)
+    except ConfigError as exc:
+        raise _error(where, key, exc.problem) from None
 
 
 def _numbers(value, n, key, where, what) -> tuple:
     if isinstance(value, (str, bytes, dict)) or not hasattr(value, "__len__"):
-        raise ConfigError(f"{where}`{key}` must be {what}, got {value!r}")
+        raise _error(where, key, f"`{key}` must be {what}, got {value!r}")
     items = list(np.asarray(value, dtype=object).reshape(-1)) if isinstance(value, np.ndarray) else list(value)
     if len(items) != n:
-        raise ConfigError(f"{where}`{key}` must be {what}: {n} values, got {len(items)}")
-    return tuple(_finite(x, key, where) for x in items)
+        raise _error(where, key, f"`{key}` must be {what}: {n} values, got {len(items)}")
+    return tuple(_check(finite_float, x, key, where) for x in items)
 
 
 def _resolution(value, where) -> tuple:
     if isinstance(value, (str, bytes, dict)) or not hasattr(value, "__len__") or len(value) != 2:
-        raise ConfigError(f"{where}`resolution` must be [width, height], got {value!r}")
-    out = []
-    for x in value:
-        ok = not isinstance(x, bool) and isinstance(x, (int, float, np.integer, np.floating)) \
-            and math.isfinite(float(x)) and float(x) == int(x) and int(x) > 0
-        if not ok:
-            raise ConfigError(f"{where}`resolution` must be two positive whole numbers [width, height], got {value!r}")
-        out.append(int(x))
-    return tuple(out)
+        raise _error(where, "resolution", f"`resolution` must be [width, height], got {value!r}")
+    return tuple(_check(int_in_range, x, "resolution", where, 1) for x in value)
 
 
 def _transform(value, key, where) -> np.ndarray:
     try:
         T = np.array(value, dtype=np.float64)
     except (TypeError, ValueError):
-        raise ConfigError(f"{where}`{key}` must be a 4x4 matrix of numbers, got {value!r}") from None
+        raise _error(where, key, f"`{key}` must be a 4x4 matrix of numbers, got {value!r}") from None
     if T.shape != (4, 4):
-        raise ConfigError(f"{where}Expected `{key}` to have shape (4, 4), got {T.shape}")
+        raise _error(where, key, f"Expected `{key}` to have shape (4, 4), got {T.shape}")
     if not np.all(np.isfinite(T)):
-        raise ConfigError(f"{where}`{key}` contains NaN or inf")
+        raise _error(where, key, f"`{key}` contains NaN or inf")
     if not np.array_equal(T[3], [0.0, 0.0, 0.0, 1.0]):
-        raise ConfigError(f"{where}`{key}` last row must be [0, 0, 0, 1], got {T[3].tolist()}")
+        raise _error(where, key, f"`{key}` last row must be [0, 0, 0, 1], got {T[3].tolist()}")
     R = T[:3, :3]
     err = float(np.abs(R.T @ R - np.eye(3)).max())
     if err > 1e-6 or np.linalg.det(R) < 0:
-        raise ConfigError(f"{where}`{key}` rotation block is not a rotation (max |R^T R - I| = {err:.3g}, "
-                          f"det {np.linalg.det(R):.6g})")
+        raise _error(where, key, f"`{key}` rotation block is not a rotation (max |R^T R - I| = {err:.3g}, "
+                                 f"det {np.linalg.det(R):.6g})")
     T.setflags(write=False)
     return T
 
@@ -468,7 +458,7 @@ def _from_either(d, where) -> np.ndarray:
         if "T_imu_cam" in d:
             other = _transform(d["T_imu_cam"], "T_imu_cam", where)
             if np.abs(other @ T - np.eye(4)).max() > 1e-6:
-                raise ConfigError(f"{where}`T_cam_imu` and `T_imu_cam` are not inverses of each other")
+                raise _error(where, "T_imu_cam", "`T_cam_imu` and `T_imu_cam` are not inverses of each other")
         return T
     if "T_imu_cam" in d:
         return _inverse(_transform(d["T_imu_cam"], "T_imu_cam", where))

@@ -241,32 +241,30 @@ def frame_stamps_ns(source, camera: Camera) -> np.ndarray:
     >>> frame_stamps_ns(scene, rs).tolist()  # the last frame's rows end by 0.75 + 0.1 s
     [0, 250000000, 500000000, 750000000]
     """
+    from ..timegrid import uniform_stamps_ns
+
     origin = int(source.origin_ns)
     t_min, t_max = float(source.t_min_s), float(source.t_max_s)
     ts = camera.timeshift_cam_imu_s
     readout = camera.readout_s
 
-    def start_s(rel_ns):
-        return rel_ns / 1e9 + ts
+    def start_s(rel_ns):  # the same float expression as the frames' source times
+        return float(_frame_times_rel(np.array([rel_ns]), ts)[0])
 
-    rel0 = math.ceil((t_min - ts) * 1e9)
-    while start_s(rel0 - 1) >= t_min:
-        rel0 -= 1
-    while start_s(rel0) < t_min:
-        rel0 += 1
-    span = t_max - readout - start_s(rel0)
-    if span < 0:
+    first = math.ceil((t_min - ts) * 1e9)  # earliest whole ns whose frame starts inside the range
+    while start_s(first - 1) >= t_min:
+        first -= 1
+    while start_s(first) < t_min:
+        first += 1
+    last = math.floor((t_max - readout - ts) * 1e9)  # latest whose last row is inside the range
+    while start_s(last + 1) + readout <= t_max:
+        last += 1
+    while start_s(last) + readout > t_max:
+        last -= 1
+    if last < first:
         raise ConfigError(f"{camera.name}: the motion ({t_max - t_min:.9g} s) is shorter than one frame's "
                           f"readout ({readout:.9g} s)")
-    period_ns = 1e9 / camera.rate_hz
-    k = np.arange(int(math.floor(span * camera.rate_hz)) + 2, dtype=np.int64)
-    if period_ns.is_integer():
-        off = k * np.int64(int(period_ns))
-    else:
-        off = np.rint(k.astype(np.float64) * period_ns).astype(np.int64)
-    rel = rel0 + off
-    keep = _frame_times_rel(rel, ts) + readout <= t_max
-    return np.int64(origin) + rel[keep]
+    return uniform_stamps_ns(origin + first, origin + last, camera.rate_hz)
 
 
 def camera_rngs(rng, names) -> list:
