@@ -317,3 +317,17 @@ def test_unix_epoch_origin_shifts_the_stamps_only(landmarks):
     b = observe_camera(make_scene("ellipse", duration_s=1.0, t0_ns=origin), RADTAN, landmarks, rng=1)
     assert np.array_equal(b.frame_t_ns - origin, a.frame_t_ns) and np.array_equal(b.t_ns - origin, a.t_ns)
     assert np.array_equal(a.u, b.u) and np.array_equal(a.landmark_id, b.landmark_id)
+
+
+def test_rolling_shutter_radtan_against_the_row_scan(scene, landmarks):
+    # pinhole rows have a pole at zero depth: the search must not take it for a root
+    cam = Camera(RADTAN.intrinsics, RADTAN.resolution, "radtan", RADTAN.distortion_coeffs, cam_T_imu=CAM_T_IMU_SIDE,
+                 rate_hz=5.0, line_delay_s=6e-5, timeshift_cam_imu_s=0.002, name="cam0")
+    o = observe_camera(scene, cam, landmarks)
+    frame_s = (o.frame_t_ns - scene.origin_ns) / 1e9 + cam.timeshift_cam_imu_s
+    frames = np.arange(0, frame_s.size, 4)
+    expected, borderline = brute_force_rows(scene, cam, landmarks.position_world, frame_s[frames])
+    got = set()
+    for j, fi in enumerate(frames):
+        got |= {(j, int(m)) for m in np.searchsorted(landmarks.id, o.landmark_id[o.t_ns == o.frame_t_ns[fi]])}
+    assert len(expected) > 50 and (got ^ expected) <= borderline
