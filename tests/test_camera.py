@@ -274,3 +274,46 @@ def test_features_csv_is_exact_and_atomic(tmp_path):
     assert np.array_equal(back["t_ns"], obs.t_ns) and np.array_equal(back["u"], obs.u)
     assert np.array_equal(back["v"], obs.v) and np.array_equal(back["landmark_id"], obs.landmark_id)
     assert sorted(x.name for x in tmp_path.iterdir()) == ["features.csv"]  # no temporary file left
+
+
+# ------------------------------------------------------------------------------ scene-file values, output files
+
+
+def test_scene_values_and_output_files(tmp_path):
+    from splineimu.camera import cameras_from_config, landmarks_from_config, observe, write_camera_outputs
+
+    write_camchain(tmp_path / "kalibr.yaml", two_cameras())
+    text = (tmp_path / "kalibr.yaml").read_text().replace("  rate_hz: 20.0\n", "")  # as Kalibr writes it
+    (tmp_path / "kalibr.yaml").write_text(text)
+    cams = cameras_from_config({"file": "kalibr.yaml", "rate_hz": 10.0}, base_dir=tmp_path)
+    assert [c.rate_hz for c in cams.values()] == [10.0, 10.0]
+    assert cams["cam1"].pixel_noise_px == 0.75  # the file's own value wins over a default
+    Landmarks([5, 6], [[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]]).to_csv(tmp_path / "points.csv")
+    assert landmarks_from_config({"file": "points.csv"}, base_dir=tmp_path).id.tolist() == [5, 6]
+    scene = make_scene("ellipse", duration_s=1.0)
+    lm = landmarks_from_config({"random": {"count": 300, "shape": "shell", "radii_m": [3, 30]}}, source=scene, rng=2)
+    for bad in ({"file": "a.csv", "random": {}}, {"random": {"count": 3, "radius": 2}}, {"points": 3}):
+        with pytest.raises(ConfigError, match="landmarks"):
+            landmarks_from_config(bad, source=scene)
+    obs = observe(scene, cams, lm, rng=0)
+    paths = write_camera_outputs(tmp_path / "out", cams, obs, lm)
+    assert {str(p.relative_to(tmp_path / "out")) for p in paths} == {
+        "mav0/cam0/features.csv", "mav0/cam1/features.csv", "landmarks.csv", "camchain.yaml",
+        "kalibr_imucam_chain.yaml"}
+    back = read_features_csv(tmp_path / "out" / "mav0" / "cam1" / "features.csv")
+    assert np.array_equal(back["u"], obs["cam1"].u) and np.array_equal(back["t_ns"], obs["cam1"].t_ns)
+    chain = yaml.safe_load((tmp_path / "out" / "camchain.yaml").read_text())
+    assert chain["cam0"]["cam_overlaps"] == ([1] if np.intersect1d(obs["cam0"].landmark_id,
+                                                                    obs["cam1"].landmark_id).size else [])
+    assert Landmarks.from_csv(tmp_path / "out" / "landmarks.csv") == lm
+
+
+def test_scene_file_errors_point_at_the_line():
+    from splineimu.camera import cameras_from_config
+    from splineimu.io.yaml import parse_yaml
+
+    doc = parse_yaml("duration_s: 3\ncameras:\n  cam0:\n    intrinsics: [1, 1, 0, 0]\n    resolution: [4, 4]\n"
+                     "    rate_hz: 20\n    distortion_model: radial\n", "scene.yaml")
+    with pytest.raises(ConfigError, match="scene.yaml:7: cam0: `distortion_model` must be one of") as info:
+        cameras_from_config(doc.data["cameras"], doc=doc)
+    assert info.value.option == "cameras.cam0.distortion_model"
