@@ -158,7 +158,8 @@ def main(argv=None):
         f"{duration:g} s of motion; landmarks uniform in a shell of radii 3-30 m around the trajectory's centre; "
         "pixel noise 1 px. cam0: EuRoC radtan, 752x480, global shutter, 20 Hz. cam1: TUM-VI equidistant, "
         "512x512, rolling shutter 30 us/row (15 ms readout), 20 Hz. Times are the best of 3 runs of "
-        "`observe(...)` (frames, poses, visibility, row solve, noise).",
+        "`observe(...)` (frames, poses, visibility, row solve, noise). Wall times grow with the machine's load: "
+        "read the OpenCV column (timed in the same process) as the ratio.",
         "",
         "| source | landmarks | cameras | observations | frames | seconds | observations/s "
         "| landmark-frames/s | OpenCV global shutter [s] | speed-up vs OpenCV |",
