@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
+from ..io.files import atomic_write_text
 
 __all__ = ["write_features_csv", "read_features_csv", "FEATURES_HEADER"]
 
@@ -52,8 +53,6 @@ def write_features_csv(path, observations) -> Path:
     u = np.asarray(observations.u, dtype=np.float64).tolist()
     v = np.asarray(observations.v, dtype=np.float64).tolist()
     body = "".join([f"{a},{b},{c!r},{d!r}\n" for a, b, c, d in zip(t, ids, u, v)])
-    from ..io.output import atomic_write_text  # (imports numba: only when writing)
-
     return atomic_write_text(path, FEATURES_HEADER + "\n" + body)
 
 

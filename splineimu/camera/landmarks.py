@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ConfigError, InputError
+from ..io.files import atomic_write_text
 
 __all__ = ["Landmarks", "SHAPES"]
 
@@ -156,8 +157,6 @@ class Landmarks:
         """
         lines = ["id,x,y,z"]
         lines += [f"{i},{x!r},{y!r},{z!r}" for i, (x, y, z) in zip(self.id.tolist(), self.position_world.tolist())]
-        from ..io.output import atomic_write_text  # (imports numba: only when writing)
-
         return atomic_write_text(path, "\n".join(lines) + "\n")
 
     # ------------------------------------------------------------------ random
