@@ -404,7 +404,8 @@ def _json_default(o):
 
 def _write_metadata(tmp, syn, rate_hz, rostopic):
     """``imu.yaml`` (Kalibr), ``kalibr_imu_chain.yaml`` (OpenVINS) and the EuRoC ``sensor.yaml``
-    / ``body.yaml`` files, all with the rate synthesized; for noise-free data the noise keys at zero."""
+    / ``body.yaml`` files, all with the rate synthesized; for noise-free data the noise keys at zero.
+    ``sensor.yaml`` holds one number per noise key, as EuRoC's: the largest of the three axes."""
     from .imu.config import KALIBR_KEYS, ImuConfig
     from .io import dataset as ds
     from .io.files import atomic_write_text

@@ -97,7 +97,8 @@ def kalibr_imu_chain_text(config, *, update_rate: float, rostopic: str = "/imu0"
     :func:`splineimu.imu.openvins.to_openvins` (identity / zero when the model has no scale,
     misalignment or g-sensitivity). :meth:`ImuConfig.from_yaml` reads it back to the same
     sensor model (its noise, scale, misalignment and g-sensitivity; the other components are
-    in ``imu.yaml``).
+    in ``imu.yaml``). A density that differs between axes is written as a list ``[x, y, z]``,
+    which OpenVINS (one number per key) does not read.
 
     Parameters
     ----------
