@@ -51,22 +51,21 @@ def load_timing(value, origin):
 
     if value is None:
         return None
+    doc, keys = _yaml_place(origin, "timing")
     if isinstance(value, TimingModel):
         model = value
+    elif doc is not None:  # errors at the block's file and line
+        model = TimingModel.from_dict(value, doc, keys)
     elif not isinstance(value, dict):
         raise ConfigError(f"`{origin.name('timing')}` must be a mapping of timing keys, got {type(value).__name__}",
                           option=origin.name("timing"))
     else:
-        doc, keys = _yaml_place(origin, "timing")
-        if doc is not None:
-            model = TimingModel.from_dict(value, doc, keys)
-        else:
-            try:
-                model = TimingModel.from_dict(value)
-            except ConfigError as exc:
-                key = str(exc.option or "").split(".")[-1]
-                name = origin.name(f"timing.{key}")
-                raise ConfigError(exc.problem.replace(f"`{key}`", f"`{name}`"), option=name) from None
+        try:
+            model = TimingModel.from_dict(value)
+        except ConfigError as exc:
+            key = str(exc.option or "").split(".")[-1]
+            name = origin.name(f"timing.{key}")
+            raise ConfigError(exc.problem.replace(f"`{key}`", f"`{name}`"), option=name) from None
     return None if model.is_identity else model
 
 
@@ -94,15 +93,13 @@ def load_vibration(value, origin):
 
         doc = read_yaml(value, "vibration file")
         model = VibrationModel.from_dict(doc.data, doc)
+    elif _yaml_place(origin, "vibration")[0] is not None:  # errors at the block's file and line
+        model = VibrationModel.from_dict(value, *_yaml_place(origin, "vibration"))
     elif isinstance(value, dict):
-        doc, keys = _yaml_place(origin, "vibration")
-        if doc is not None:
-            model = VibrationModel.from_dict(value, doc, keys)
-        else:
-            try:
-                model = VibrationModel.from_dict(value)
-            except (ConfigError, InputError) as exc:
-                raise origin.relocate("vibration", ConfigError(exc.problem)) from None
+        try:
+            model = VibrationModel.from_dict(value)
+        except (ConfigError, InputError) as exc:
+            raise origin.relocate("vibration", ConfigError(exc.problem)) from None
     else:
         name = origin.name("vibration")
         raise ConfigError(f"`{name}` must be a file or a mapping, got {type(value).__name__}", option=name)

@@ -243,8 +243,8 @@ class SampleTimes:
         last = self.last_true_ns if self.last_true_ns is not None else (
             int(self.true_ns[-1]) if self.true_ns.size else first)
         if self.index.size == 0:
-            return [{"first_index": 0, "count": int(self.n_taken), "t_start_ns": first, "t_end_ns": last}][:max_ranges] \
-                if self.n_taken else []
+            everything = {"first_index": 0, "count": int(self.n_taken), "t_start_ns": first, "t_end_ns": last}
+            return [everything][:max_ranges] if self.n_taken else []
         # kept indices with the grid's ends as sentinels (-1 before, n_taken after)
         idx = np.concatenate([[-1], self.index, [self.n_taken]])
         t = np.concatenate([[first], self.true_ns, [last]])
