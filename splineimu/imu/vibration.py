@@ -41,6 +41,7 @@ import numpy as np
 
 from .._jit import jit
 from ..validation import as_vector, nonnegative_float, positive_float
+from .timing import _child_generators, _error
 
 #: Cosines per random band.
 N_TONES = 256
@@ -106,8 +107,6 @@ class VibrationModel:
         from their own child streams (adding a gyro component leaves the accel's phases as
         they were).
         """
-        from .timing import _child_generators
-
         tables = []
         for s, gen in zip(SENSORS, _child_generators(rng, len(SENSORS))):
             freq, amp, phase = [], [], []
@@ -128,14 +127,6 @@ class VibrationModel:
             else:
                 tables.append(None)
         return VibrationRealization(*tables)
-
-
-def _error(doc, keys, message):
-    from ..errors import ConfigError
-
-    if doc is None:
-        return ConfigError(message, option=".".join(map(str, keys)) or None)
-    return doc.error(message, *keys)
 
 
 def _component(item, doc, keys, label):
