@@ -29,12 +29,13 @@ import numpy as np
 from .yaml import float_text
 
 __all__ = ["IMU_CSV", "IMU_SENSOR_YAML", "GROUNDTRUTH_CSV", "GROUNDTRUTH_SENSOR_YAML", "BODY_YAML",
-           "INCREMENTS_CSV", "dataset_file", "dataset_root", "groundtruth_beside", "recorded_sampling",
+           "INCREMENTS_CSV", "VIBRATION_CSV", "dataset_file", "dataset_root", "groundtruth_beside", "recorded_sampling",
            "sensor_yaml_text", "body_yaml_text"]
 
 IMU_CSV = "mav0/imu0/data.csv"
 IMU_SENSOR_YAML = "mav0/imu0/sensor.yaml"
 INCREMENTS_CSV = "mav0/imu0/increments.csv"
+VIBRATION_CSV = "mav0/imu0/vibration.csv"
 GROUNDTRUTH_CSV = "mav0/state_groundtruth_estimate0/data.csv"
 GROUNDTRUTH_SENSOR_YAML = "mav0/state_groundtruth_estimate0/sensor.yaml"
 BODY_YAML = "mav0/body.yaml"
