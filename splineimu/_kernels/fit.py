@@ -27,47 +27,39 @@ from .lie import (
     so3_jacobian_inv_into,
     so3_log_into,
 )
-from .spline import _segment
+from .spline import _segment, basis_into
 
 
 @jit
-def _cum_basis(Mc, u, b):
-    k = Mc.shape[0]
-    for j in range(k):
-        acc = 0.0
-        un = 1.0
-        for n in range(k):
-            acc += Mc[j, n] * un
-            un *= u
-        b[j] = acc
+def _accumulate(Jm, r, z0, z1, w, seg, H, g):
+    """Add ``w J^T J`` and ``w J^T r`` over residual rows ``z0 .. z1-1`` to the banded blocks
+    (``Jm`` (k, d, d): the residual's Jacobian blocks on control points ``seg .. seg+k-1``)."""
+    k = Jm.shape[0]
+    d = Jm.shape[2]
+    for a in range(k):
+        for c in range(k - a):
+            for r0 in range(d):
+                for c0 in range(d):
+                    s = 0.0
+                    for z in range(z0, z1):
+                        s += Jm[a, z, r0] * Jm[a + c, z, c0]
+                    H[seg + a, c, r0, c0] += w * s
+        for r0 in range(d):
+            s = 0.0
+            for z in range(z0, z1):
+                s += Jm[a, z, r0] * r[z]
+            g[seg + a, r0] += w * s
 
 
 @jit
-def _basis(M, u, b):
-    _cum_basis(M, u, b)
-
-
-@jit
-def _mm(A, B, C):
-    """C = A @ B for square matrices of equal size."""
+def _mm(A, B, C, transpose_a=False):
+    """C = A @ B (or A^T @ B) for square matrices of equal size."""
     n = A.shape[0]
     for i in range(n):
         for j in range(n):
             s = 0.0
             for m in range(n):
-                s += A[i, m] * B[m, j]
-            C[i, j] = s
-
-
-@jit
-def _mtm(A, B, C):
-    """C = A^T @ B."""
-    n = A.shape[0]
-    for i in range(n):
-        for j in range(n):
-            s = 0.0
-            for m in range(n):
-                s += A[m, i] * B[m, j]
+                s += (A[m, i] if transpose_a else A[i, m]) * B[m, j]
             C[i, j] = s
 
 
@@ -76,9 +68,10 @@ def position_normal_equations(s_all, w_all, P_meas, Mc_plain, nseg, H, rhs):
     """Split spline position: H (n, k) banded scalar blocks, rhs (n, 3); plain basis."""
     k = Mc_plain.shape[0]
     b = np.empty(k)
+    bd = np.empty(k)
     for m in range(s_all.shape[0]):
         seg, u = _segment(s_all[m], nseg)
-        _basis(Mc_plain, u, b)
+        basis_into(Mc_plain, u, 1.0, b, bd, bd)
         w = w_all[m]
         for a in range(k):
             wa = w * b[a]
@@ -92,9 +85,10 @@ def position_normal_equations(s_all, w_all, P_meas, Mc_plain, nseg, H, rhs):
 def position_residuals(s_all, P_meas, Pc, M_plain, nseg, out):
     k = M_plain.shape[0]
     b = np.empty(k)
+    bd = np.empty(k)
     for m in range(s_all.shape[0]):
         seg, u = _segment(s_all[m], nseg)
-        _basis(M_plain, u, b)
+        basis_into(M_plain, u, 1.0, b, bd, bd)
         for d in range(3):
             acc = 0.0
             for j in range(k):
@@ -110,6 +104,7 @@ def so3_normal_equations(s_all, w_all, R_meas, Rc, D, Mc, nseg, H, g, res):
     """
     k = Mc.shape[0]
     b = np.empty(k)
+    bd = np.empty(k)
     A = np.empty((k, 3, 3))
     P = np.empty((k, 3, 3))  # suffix products P_j = A_{j+1} .. A_{k-1}
     R = np.empty((3, 3))
@@ -126,7 +121,7 @@ def so3_normal_equations(s_all, w_all, R_meas, Rc, D, Mc, nseg, H, g, res):
     cost = 0.0
     for m in range(s_all.shape[0]):
         seg, u = _segment(s_all[m], nseg)
-        _cum_basis(Mc, u, b)
+        basis_into(Mc, u, 1.0, b, bd, bd)
         for j in range(1, k):
             so3_exp_into(b[j] * D[seg + j, 0], b[j] * D[seg + j, 1], b[j] * D[seg + j, 2], A[j])
         # suffix products
@@ -138,7 +133,7 @@ def so3_normal_equations(s_all, w_all, R_meas, Rc, D, Mc, nseg, H, g, res):
         # R(t) = R_s P_0
         _mm(Rc[seg], P[0], R)
         # residual r = Log(R^T R_meas)
-        _mtm(R, R_meas[m], T)
+        _mm(R, R_meas[m], T, True)
         so3_log_into(T, q, r)
         for d in range(3):
             res[m, d] = r[d]
@@ -156,7 +151,7 @@ def so3_normal_equations(s_all, w_all, R_meas, Rc, D, Mc, nseg, H, g, res):
             dj2 = D[seg + j, 2]
             so3_jacobian_into(b[j] * dj0, b[j] * dj1, b[j] * dj2, -1.0, Jr_b)
             # X = P_j^T b_j Jr(b_j d_j)
-            _mtm(P[j], Jr_b, X)
+            _mm(P[j], Jr_b, X, True)
             for r0 in range(3):
                 for c0 in range(3):
                     X[r0, c0] *= b[j]
@@ -178,19 +173,7 @@ def so3_normal_equations(s_all, w_all, R_meas, Rc, D, Mc, nseg, H, g, res):
             for r0 in range(3):
                 for c0 in range(3):
                     Jm[i, r0, c0] = -E[r0, c0]
-        for a in range(k):
-            for c in range(k - a):
-                for r0 in range(3):
-                    for c0 in range(3):
-                        s = 0.0
-                        for z in range(3):
-                            s += Jm[a, z, r0] * Jm[a + c, z, c0]
-                        H[seg + a, c, r0, c0] += w * s
-            for r0 in range(3):
-                s = 0.0
-                for z in range(3):
-                    s += Jm[a, z, r0] * r[z]
-                g[seg + a, r0] += w * s
+        _accumulate(Jm, r, 0, 3, w, seg, H, g)
     return cost
 
 
@@ -251,10 +234,12 @@ def _adj_inv_into(R, t, Ad, K):
 def se3_normal_equations(s_all, w6, R_meas, p_meas, Rc, pc, D, Mc, nseg, H, g, res):
     """Gauss-Newton blocks for SE3 residuals ``Log(T(t)^-1 T_meas)`` = [rho, phi].
 
-    w6 (M, 6) diagonal weights. H (n, k, 6, 6), g (n, 6), res (M, 6). Returns the cost.
+    w6 (M, 6) diagonal weights, equal within the translation rows and within the rotation rows.
+    H (n, k, 6, 6), g (n, 6), res (M, 6). Returns the cost.
     """
     k = Mc.shape[0]
     b = np.empty(k)
+    bd = np.empty(k)
     AR = np.empty((k, 3, 3))
     At = np.empty((k, 3))
     PR = np.empty((k, 3, 3))
@@ -282,7 +267,7 @@ def se3_normal_equations(s_all, w6, R_meas, p_meas, Rc, pc, D, Mc, nseg, H, g, r
     cost = 0.0
     for m in range(s_all.shape[0]):
         seg, u = _segment(s_all[m], nseg)
-        _cum_basis(Mc, u, b)
+        basis_into(Mc, u, 1.0, b, bd, bd)
         for j in range(1, k):
             for z in range(6):
                 xi[z] = b[j] * D[seg + j, z]
@@ -302,7 +287,7 @@ def se3_normal_equations(s_all, w6, R_meas, p_meas, Rc, pc, D, Mc, nseg, H, g, r
         for r0 in range(3):
             t[r0] = pc[seg, r0] + Rc[seg, r0, 0] * Pt[0, 0] + Rc[seg, r0, 1] * Pt[0, 1] + Rc[seg, r0, 2] * Pt[0, 2]
         # residual: Log(T^-1 T_meas) = Log(R^T R_m, R^T (p_m - t))
-        _mtm(R, R_meas[m], TR)
+        _mm(R, R_meas[m], TR, True)
         for r0 in range(3):
             tt[r0] = (R[0, r0] * (p_meas[m, 0] - t[0]) + R[1, r0] * (p_meas[m, 1] - t[1])
                       + R[2, r0] * (p_meas[m, 2] - t[2]))
@@ -344,19 +329,9 @@ def se3_normal_equations(s_all, w6, R_meas, p_meas, Rc, pc, D, Mc, nseg, H, g, r
             for r0 in range(6):
                 for c0 in range(6):
                     Jm[i, r0, c0] = -E[r0, c0]
-        for a in range(k):
-            for c in range(k - a):
-                for r0 in range(6):
-                    for c0 in range(6):
-                        s = 0.0
-                        for z in range(6):
-                            s += Jm[a, z, r0] * w6[m, z] * Jm[a + c, z, c0]
-                        H[seg + a, c, r0, c0] += s
-            for r0 in range(6):
-                s = 0.0
-                for z in range(6):
-                    s += Jm[a, z, r0] * w6[m, z] * r[z]
-                g[seg + a, r0] += s
+        # translation and rotation rows carry one weight each
+        _accumulate(Jm, r, 0, 3, w6[m, 0], seg, H, g)
+        _accumulate(Jm, r, 3, 6, w6[m, 3], seg, H, g)
     return cost
 
 

@@ -199,6 +199,10 @@ def imu_split(t, t0, dt, nseg, Rc, K, Mc, M, g, out):
             S[_F1, i] = Rf[r9 + np.uint64(1)] * h0 + Rf[r9 + np.uint64(4)] * h1 + Rf[r9 + np.uint64(7)] * h2
             S[_F2, i] = Rf[r9 + np.uint64(2)] * h0 + Rf[r9 + np.uint64(5)] * h1 + Rf[r9 + np.uint64(8)] * h2
         # w and f through the steps A_j^T, j = 1 .. k-1
+        for i in range(m):
+            S[_W0, i] = 0.0
+            S[_W1, i] = 0.0
+            S[_W2, i] = 0.0
         for j in range(1, k):
             off = np.uint64(KNOT_COLS * j)
             for i in range(m):
@@ -220,32 +224,19 @@ def imu_split(t, t0, dt, nseg, Rc, K, Mc, M, g, out):
                 for i in range(m):
                     S[_B, i] += cn * S[_PW + n, i]
                     S[_BD, i] += cn * (fn * S[_PW + n - 1, i])
-            if j == 1:
-                # w = 0 before the first step: A_1^T w = 0
-                for i in range(m):
-                    d0 = S[_D0, i]
-                    d1 = S[_D1, i]
-                    d2 = S[_D2, i]
-                    ct, al, be = _exp_coefficients(S[_B, i], S[_ANG, i])
-                    S[_F0, i], S[_F1, i], S[_F2, i] = _rotate_back(S[_F0, i], S[_F1, i], S[_F2, i], d0, d1, d2,
-                                                                   ct, al, be)
-                    bd = S[_BD, i] * inv_dt
-                    S[_W0, i] = bd * d0
-                    S[_W1, i] = bd * d1
-                    S[_W2, i] = bd * d2
-            else:
-                for i in range(m):
-                    d0 = S[_D0, i]
-                    d1 = S[_D1, i]
-                    d2 = S[_D2, i]
-                    ct, al, be = _exp_coefficients(S[_B, i], S[_ANG, i])
-                    S[_F0, i], S[_F1, i], S[_F2, i] = _rotate_back(S[_F0, i], S[_F1, i], S[_F2, i], d0, d1, d2,
-                                                                   ct, al, be)
-                    r0, r1, r2 = _rotate_back(S[_W0, i], S[_W1, i], S[_W2, i], d0, d1, d2, ct, al, be)
-                    bd = S[_BD, i] * inv_dt
-                    S[_W0, i] = r0 + bd * d0
-                    S[_W1, i] = r1 + bd * d1
-                    S[_W2, i] = r2 + bd * d2
+            for i in range(m):
+                d0 = S[_D0, i]
+                d1 = S[_D1, i]
+                d2 = S[_D2, i]
+                ct, al, be = _exp_coefficients(S[_B, i], S[_ANG, i])
+                S[_F0, i], S[_F1, i], S[_F2, i] = _rotate_back(S[_F0, i], S[_F1, i], S[_F2, i], d0, d1, d2,
+                                                               ct, al, be)
+                # w = 0 before the first step (set above), where A_1^T w adds exact zeros
+                r0, r1, r2 = _rotate_back(S[_W0, i], S[_W1, i], S[_W2, i], d0, d1, d2, ct, al, be)
+                bd = S[_BD, i] * inv_dt
+                S[_W0, i] = r0 + bd * d0
+                S[_W1, i] = r1 + bd * d1
+                S[_W2, i] = r2 + bd * d2
         # out[0, start + i], out[1, start + i]
         for i in range(m):
             o = np.uint64(3 * (start + i))

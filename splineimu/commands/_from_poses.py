@@ -122,7 +122,8 @@ def run_from_poses(args, read) -> int:
 def _one(args, track, out_dir, order, knot, gaps, max_gap, force=False, quiet=False):
     from ..errors import InputError
     from ..pipeline import synthesize_stream, uniform_stamps_ns, write_output
-    from ..spline.fit import DEFAULT_SMOOTHNESS, fit
+    from ..spline.banded import DEFAULT_SMOOTHNESS
+    from ..spline.fit import fit
     from ._common import load_extrinsic, say, seed_or_default
 
     origin = int(track.t_ns[0])

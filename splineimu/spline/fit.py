@@ -23,13 +23,21 @@ import time
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
-from scipy.linalg import solveh_banded
 
 from .. import lie
 from .._kernels import fit as _kf
-from ..errors import SplineImuError
+from ..errors import InputError, SplineImuError
+from .banded import (
+    DEFAULT_SMOOTHNESS,
+    SPARSE_SMOOTHNESS,
+    add_position_penalty,
+    row_weights,
+    solve_banded_blocks,
+    solve_banded_scalar,
+)
 from .basis import blending_matrix
 from .core import KINDS, Spline
+from .knots import choose_knot_spacing
 
 #: Gauss-Newton stops when the largest update is below this (rad, or m for SE3 translation)
 GN_STEP_TOL = 1e-9
@@ -37,14 +45,6 @@ GN_STEP_TOL = 1e-9
 OUTLIER_SIGMAS = 8.0
 OUTLIER_FLOOR_M = 2e-3
 OUTLIER_FLOOR_RAD = 2e-3
-#: Relative weight of the default smoothness penalty where data are dense (negligible bias).
-DEFAULT_SMOOTHNESS = 1e-10
-#: Relative penalty weight on control points with little data in their support (gaps, sparse
-#: stretches): there the curve is the smoothest bridge, instead of being steered by the noise of
-#: the few poses at the gap's borders.
-SPARSE_SMOOTHNESS = 1e-3
-
-
 @dataclass
 class FitReport:
     """What a fit did: layout, residuals and solver statistics (SI units)."""
@@ -98,21 +98,21 @@ def _validate(t_s, positions, quat_xyzw, weights):
     P = np.ascontiguousarray(np.asarray(positions, dtype=np.float64))
     q = np.asarray(quat_xyzw, dtype=np.float64)
     if P.shape != (t.size, 3):
-        raise SplineImuError(f"Expected `positions` to have shape ({t.size}, 3), got {P.shape}")
+        raise InputError(f"Expected `positions` to have shape ({t.size}, 3), got {P.shape}")
     if q.shape != (t.size, 4):
-        raise SplineImuError(f"Expected `quat_xyzw` to have shape ({t.size}, 4), got {q.shape}")
+        raise InputError(f"Expected `quat_xyzw` to have shape ({t.size}, 4), got {q.shape}")
     if not (np.all(np.isfinite(t)) and np.all(np.isfinite(P)) and np.all(np.isfinite(q))):
-        raise SplineImuError("poses contain NaN or inf")
+        raise InputError("poses contain NaN or inf")
     if t.size > 1 and np.any(np.diff(t) <= 0):
         i = int(np.flatnonzero(np.diff(t) <= 0)[0])
-        raise SplineImuError(f"timestamps must be strictly increasing (pose {i + 1} at {t[i + 1]!r} s)")
+        raise InputError(f"timestamps must be strictly increasing (pose {i + 1} at {t[i + 1]!r} s)")
     R = lie.quat_xyzw_to_matrix(q)
     if weights is None:
         w = np.ones(t.size)
     else:
         w = np.ascontiguousarray(np.asarray(weights, dtype=np.float64).reshape(-1))
         if w.shape != t.shape or np.any(~np.isfinite(w)) or np.any(w < 0):
-            raise SplineImuError("`weights` must be (N,) finite and non-negative")
+            raise InputError("`weights` must be (N,) finite and non-negative")
     return t, P, R, w
 
 
@@ -134,48 +134,6 @@ def _interp_rotations(t, R, tq):
 
     tq = np.clip(tq, t[0], t[-1])
     return Slerp(t, Rotation.from_matrix(R))(tq).as_matrix()
-
-
-def _solve_banded_blocks(H, rhs, damping=0.0):
-    """Solve the symmetric block-banded system (upper blocks H (n, k, d, d)) for rhs (n*d, ...)."""
-    n, k, d, _ = H.shape
-    if damping:
-        H = H.copy()
-        idx = np.arange(d)
-        H[:, 0, idx, idx] += damping * np.maximum(H[:, 0, idx, idx], 1e-12)
-    ab = np.zeros((k * d, n * d))
-    _kf.blocks_to_lapack_upper(np.ascontiguousarray(H), ab)
-    return solveh_banded(ab, rhs, lower=False, check_finite=False)
-
-
-def _difference_matrix_band(n, order_diff):
-    """Coefficients of the order-r difference operator: row j touches j .. j + r."""
-    c = np.array([1.0])
-    for _ in range(order_diff):
-        c = np.convolve(c, [-1.0, 1.0])
-    return c  # length r + 1
-
-
-def _add_position_penalty(Hs, mu, r):
-    """Add D_r^T diag(mu) D_r to scalar banded blocks Hs (n, k); mu scalar or per row (n - r,)."""
-    n, k = Hs.shape
-    c = _difference_matrix_band(n, r)
-    L = c.size
-    if L > k or n < L:
-        return
-    mu = np.broadcast_to(np.asarray(mu, dtype=np.float64), (n - L + 1,))
-    for a in range(L):
-        for b in range(a, L):
-            Hs[a: n - L + 1 + a, b - a] += mu * c[a] * c[b]
-
-
-def _row_weights(sparse, width):
-    """Per penalty row touching controls j .. j + width - 1: True where any of them is sparse."""
-    n = sparse.size
-    if n < width:
-        return np.zeros(0, dtype=bool)
-    win = np.lib.stride_tricks.sliding_window_view(sparse, width)
-    return win.any(axis=1)
 
 
 def _rotation_penalty(D, tangent_dim, mu, H, g, jac_inv):
@@ -251,7 +209,7 @@ class _Problem:
         self.n_sparse = int(self.sparse.sum())
 
     def _mu(self, width):
-        rows = _row_weights(self.sparse, width)
+        rows = row_weights(self.sparse, width)
         return np.where(rows, SPARSE_SMOOTHNESS, self.smoothness) * self.data_per_ctrl
 
     # ------------------------------------------------------------------ position (split)
@@ -262,11 +220,8 @@ class _Problem:
         w = self.w * self.w_pos
         _kf.position_normal_equations(self.s, w, self.P, self.M, self.nseg, Hs, rhs)
         r = min(3, k - 1)
-        _add_position_penalty(Hs, self._mu(r + 1) * self.w_pos, r)
-        ab = np.zeros((k, n))
-        for c in range(k):
-            ab[k - 1 - c, c:] = Hs[: n - c, c]
-        return solveh_banded(ab, rhs, lower=False, check_finite=False)
+        add_position_penalty(Hs, self._mu(r + 1) * self.w_pos, r)
+        return solve_banded_scalar(Hs, rhs)
 
     def position_residuals(self, Pc):
         out = np.empty((self.t.size, 3))
@@ -309,7 +264,7 @@ class _Problem:
         it = 0
         converged = False
         for it in range(1, max_iter + 1):
-            delta = _solve_banded_blocks(H, -g.reshape(-1), damping=lam).reshape(g.shape)
+            delta = solve_banded_blocks(H, -g.reshape(-1), damping=lam).reshape(g.shape)
             step = float(np.abs(delta).max())
             if se3:
                 T = lie.se3_exp(delta)
@@ -410,7 +365,7 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
         order = int(order)
     t, P, R, w = _validate(t_s, positions, quat_xyzw, weights)
     if t.size < 2:
-        raise SplineImuError(f"too few poses to fit: got {t.size}, need at least 2")
+        raise InputError(f"too few poses to fit: got {t.size}, need at least 2")
     knot_choice = None
     if isinstance(knot_spacing_s, str) and knot_spacing_s != "auto":
         try:
@@ -418,8 +373,6 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
         except ValueError:
             raise SplineImuError(f"knot spacing must be a number or 'auto', got {knot_spacing_s!r}") from None
     if isinstance(knot_spacing_s, str) or auto_order:
-        from .knots import choose_knot_spacing
-
         cands = None if isinstance(knot_spacing_s, str) else np.array([float(knot_spacing_s)])
         knot_choice = choose_knot_spacing(t, P, R, order=order, candidates=cands)
         order = int(knot_choice["order"])

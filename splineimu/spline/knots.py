@@ -24,10 +24,10 @@ orders 4, 5 and 6 are compared the same way and the best predicted one is taken.
 from __future__ import annotations
 
 import numpy as np
-from scipy.linalg import solveh_banded
 
 from .. import lie
 from .._kernels import fit as _kf
+from .banded import DEFAULT_SMOOTHNESS, add_position_penalty, solve_banded_scalar
 from .basis import basis_values, blending_matrix
 
 ACCEL_TO_GYRO_WEIGHT = 10.0
@@ -111,17 +111,12 @@ class _Transfer:
         rhs0 = np.zeros((n, 3))
         _kf.position_normal_equations(np.ascontiguousarray(s), np.ones(t.size), np.zeros((t.size, 3)),
                                       blending_matrix(k), nseg, Hs, rhs0)
-        from .fit import DEFAULT_SMOOTHNESS, _add_position_penalty
-
-        _add_position_penalty(Hs, DEFAULT_SMOOTHNESS * t.size / n, min(3, k - 1))
-        ab = np.zeros((k, n))
-        for c in range(k):
-            ab[k - 1 - c, c:] = Hs[: n - c, c]
+        add_position_penalty(Hs, DEFAULT_SMOOTHNESS * t.size / n, min(3, k - 1))
         w = 2 * np.pi * freqs
         ph = np.outer(t, w)
         rng = np.random.default_rng(12345)
         Y = np.concatenate([np.cos(ph), np.sin(ph), rng.normal(size=(t.size, 16))], axis=1)
-        C = solveh_banded(ab, A.T @ Y, lower=False, check_finite=False)
+        C = solve_banded_scalar(Hs, A.T @ Y)
         te = np.linspace(span * 0.3, span * 0.7, 240)
         se = te / dt
         sege = np.floor(se).astype(int)
