@@ -9,7 +9,7 @@ import pytest
 
 from splineimu import Spline, lie
 from splineimu._kernels import spline as _k
-from splineimu._kernels.spline_imu import BLOCK, KNOT_ANGLE, KNOT_COLS, KNOT_D, KNOT_P, split_imu_knots
+from splineimu._kernels.spline_imu import BLOCK, KNOT_ANGLE, KNOT_COLS, KNOT_D, split_imu_knots
 
 # Both kernels share the rounding of the basis and of the acceleration (the same power sums in
 # the same order); they differ in how they rotate (Taylor polynomials and Rodrigues on the
@@ -167,9 +167,8 @@ def test_se3_imu_matches_differenced_poses():
 
 def test_knot_table():
     spl = random_split_spline(4, 5)
-    K = split_imu_knots(spl._D, spl.control_positions)
+    K = split_imu_knots(spl._D)
     assert K.shape == (spl.n_control, KNOT_COLS) and K.flags.c_contiguous
     np.testing.assert_array_equal(K[:, KNOT_D:KNOT_D + 3], spl._D)
-    np.testing.assert_array_equal(K[:, KNOT_P:KNOT_P + 3], spl.control_positions)
     np.testing.assert_allclose(K[:, KNOT_ANGLE], np.linalg.norm(spl._D, axis=1), rtol=1e-15)
     assert K[0, KNOT_ANGLE] == 0.0

@@ -335,23 +335,130 @@ def se3_normal_equations(s_all, w6, R_meas, p_meas, Rc, pc, D, Mc, nseg, H, g, r
     return cost
 
 
+# ------------------------------------------------------------------- cross-validation
 @jit
-def blocks_to_lapack_upper(H, ab):
-    """Block-banded (n, k, d, d) upper blocks -> LAPACK upper banded storage (u + 1, n d),
-    ``ab[u + i - j, j] = A[i, j]`` for ``i <= j``, with ``u = k d - 1``."""
+def fold_normal_equations(s_all, w_all, fold, X, M, nseg, H, rhs):
+    """Per-fold contributions of an ordinary B-spline fit of ``X`` (N, d).
+
+    ``fold`` (N,) int in [0, F); H (F, n, k) banded scalar blocks and rhs (F, n, d) receive the
+    poses of each fold; the training system of fold f is the sum over the others.
+    """
+    k = M.shape[0]
+    d = X.shape[1]
+    b = np.empty(k)
+    bd = np.empty(k)
+    for m in range(s_all.shape[0]):
+        seg, u = _segment(s_all[m], nseg)
+        basis_into(M, u, 1.0, b, bd, bd)
+        f = fold[m]
+        w = w_all[m]
+        for a in range(k):
+            wa = w * b[a]
+            for c in range(k - a):
+                H[f, seg + a, c] += wa * b[a + c]
+            for z in range(d):
+                rhs[f, seg + a, z] += wa * X[m, z]
+
+
+@jit
+def fold_prediction_errors(s_all, fold, X, C, M, nseg, out):
+    """``out[m] = |X_m - x_f(t_m)|^2`` with ``x_f`` the spline of control points ``C[f]`` (F, n, d),
+    ``f = fold[m]``: the error of predicting each pose from a fit that did not see it."""
+    k = M.shape[0]
+    d = X.shape[1]
+    b = np.empty(k)
+    bd = np.empty(k)
+    for m in range(s_all.shape[0]):
+        seg, u = _segment(s_all[m], nseg)
+        basis_into(M, u, 1.0, b, bd, bd)
+        f = fold[m]
+        e2 = 0.0
+        for z in range(d):
+            acc = 0.0
+            for j in range(k):
+                acc += b[j] * C[f, seg + j, z]
+            e = X[m, z] - acc
+            e2 += e * e
+        out[m] = e2
+
+
+@jit
+def spline_derivative(s_all, C, M, nseg, inv_dt, r, out):
+    """``r``-th time derivative (r = 0, 1, 2) of the ordinary B-spline with control points C (n, d)."""
+    k = M.shape[0]
+    d = C.shape[1]
+    b = np.empty(k)
+    bd = np.empty(k)
+    bdd = np.empty(k)
+    for m in range(s_all.shape[0]):
+        seg, u = _segment(s_all[m], nseg)
+        basis_into(M, u, inv_dt, b, bd, bdd)
+        for z in range(d):
+            acc = 0.0
+            for j in range(k):
+                x = b[j] if r == 0 else (bd[j] if r == 1 else bdd[j])
+                acc += x * C[seg + j, z]
+            out[m, z] = acc
+
+
+# ------------------------------------------------------------------- banded solves
+@jit
+def blocks_to_band(H, out):
+    """Block-banded (n, k, d, d) upper blocks -> scalar upper band ``out`` (n d, k d),
+    ``out[i, c] = A[i, i + c]``."""
     n = H.shape[0]
     k = H.shape[1]
     d = H.shape[2]
-    u = k * d - 1
     for bi in range(n):
         for c in range(k):
-            bj = bi + c
-            if bj >= n:
+            if bi + c >= n:
                 break
             for r0 in range(d):
-                i = bi * d + r0
                 for c0 in range(d):
-                    j = bj * d + c0
-                    if c == 0 and c0 < r0:
-                        continue
-                    ab[u + i - j, j] = H[bi, c, r0, c0]
+                    off = c * d + c0 - r0
+                    if off >= 0:
+                        out[bi * d + r0, off] = H[bi, c, r0, c0]
+
+
+@jit
+def band_cholesky_solve(A, B):
+    """Solve ``A X = B`` in place of ``B`` (n, m) for the symmetric positive definite band
+    matrix with upper diagonals ``A`` (n, w) (``A[i, c]`` = entry (i, i + c)); ``A`` is
+    overwritten by its factor ``U`` (A = U^T U). Returns False if A is not positive definite."""
+    n = A.shape[0]
+    w = A.shape[1]
+    m = B.shape[1]
+    for i in range(n):
+        for c in range(w):
+            if i + c >= n:
+                break
+            s = A[i, c]
+            for q in range(1, w - c):
+                if i - q < 0:
+                    break
+                s -= A[i - q, q] * A[i - q, q + c]
+            if c == 0:
+                if not s > 0.0:
+                    return False
+                A[i, 0] = np.sqrt(s)
+            else:
+                A[i, c] = s / A[i, 0]
+    # U^T y = b
+    for i in range(n):
+        for z in range(m):
+            s = B[i, z]
+            for q in range(1, w):
+                if i - q < 0:
+                    break
+                s -= A[i - q, q] * B[i - q, z]
+            B[i, z] = s / A[i, 0]
+    # U x = y
+    for i in range(n - 1, -1, -1):
+        for z in range(m):
+            s = B[i, z]
+            for c in range(1, w):
+                if i + c >= n:
+                    break
+                s -= A[i, c] * B[i + c, z]
+            B[i, z] = s / A[i, 0]
+    return True

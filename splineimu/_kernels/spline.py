@@ -135,17 +135,21 @@ def _write_outputs(i, want, R, q, p0, p1, p2, w0, w1, w2, a0, a1, a2, out_R, out
 
 
 @jit
-def eval_split(s_all, nseg, dt, Rc, D, Pc, Mc, M, g, want,
+def eval_split(s_all, nseg, dt, Rc, D, Mc, sp_all, nseg_p, dt_p, Pc, M, g, want,
                out_R, out_q, out_p, out_w, out_wd, out_v, out_a, out_f):
-    """Split spline: cumulative SO3 rotation, ordinary R3 position. Writes the wanted outputs."""
+    """Split spline: cumulative SO3 rotation on its grid (``s_all``, ``nseg``, ``dt``, ``Mc``),
+    ordinary R3 position on its own (``sp_all``, ``nseg_p``, ``dt_p``, ``M``). Writes the wanted
+    outputs."""
     k = Mc.shape[0]
+    kp = M.shape[0]
     inv_dt = 1.0 / dt
+    inv_dtp = 1.0 / dt_p
     b = np.empty(k)
     bd = np.empty(k)
     bdd = np.empty(k)
-    pb = np.empty(k)
-    pbd = np.empty(k)
-    pbdd = np.empty(k)
+    pb = np.empty(kp)
+    pbd = np.empty(kp)
+    pbdd = np.empty(kp)
     R = np.empty((3, 3))
     A = np.empty((3, 3))
     T = np.empty((3, 3))
@@ -159,7 +163,8 @@ def eval_split(s_all, nseg, dt, Rc, D, Pc, Mc, M, g, want,
     for i in range(s_all.shape[0]):
         seg, u = _segment(s_all[i], nseg)
         basis_into(Mc, u, inv_dt, b, bd, bdd)
-        basis_into(M, u, inv_dt, pb, pbd, pbdd)
+        segp, up = _segment(sp_all[i], nseg_p)
+        basis_into(M, up, inv_dtp, pb, pbd, pbdd)
         # position and its derivatives
         p0 = 0.0
         p1 = 0.0
@@ -170,10 +175,10 @@ def eval_split(s_all, nseg, dt, Rc, D, Pc, Mc, M, g, want,
         c0 = 0.0
         c1 = 0.0
         c2 = 0.0
-        for j in range(k):
-            x0 = Pc[seg + j, 0]
-            x1 = Pc[seg + j, 1]
-            x2 = Pc[seg + j, 2]
+        for j in range(kp):
+            x0 = Pc[segp + j, 0]
+            x1 = Pc[segp + j, 1]
+            x2 = Pc[segp + j, 2]
             p0 += pb[j] * x0
             p1 += pb[j] * x1
             p2 += pb[j] * x2

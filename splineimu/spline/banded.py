@@ -7,7 +7,6 @@ shape (n, k, d, d) (``d = 1`` for the position part of split splines, as (n, k))
 from __future__ import annotations
 
 import numpy as np
-from scipy.linalg import solveh_banded
 
 from .._kernels import fit as _kf
 
@@ -20,12 +19,13 @@ SPARSE_SMOOTHNESS = 1e-3
 
 
 def solve_banded_scalar(Hs, rhs):
-    """Solve the symmetric banded system with upper diagonals ``Hs`` (n, k) for ``rhs`` (n, ...)."""
-    n, k = Hs.shape
-    ab = np.zeros((k, n))
-    for c in range(k):
-        ab[k - 1 - c, c:] = Hs[: n - c, c]
-    return solveh_banded(ab, rhs, lower=False, check_finite=False)
+    """Solve the symmetric banded system with upper diagonals ``Hs`` (n, k) for ``rhs`` (n, ...)
+    (banded Cholesky in a kernel; ``Hs`` is left untouched)."""
+    n = Hs.shape[0]
+    B = np.array(rhs, dtype=np.float64, order="C").reshape(n, -1)
+    if not _kf.band_cholesky_solve(np.array(Hs, dtype=np.float64, order="C"), B):
+        raise np.linalg.LinAlgError("banded normal matrix is not positive definite")
+    return B.reshape(np.shape(rhs))
 
 
 def solve_banded_blocks(H, rhs, damping=0.0):
@@ -35,9 +35,9 @@ def solve_banded_blocks(H, rhs, damping=0.0):
         H = H.copy()
         idx = np.arange(d)
         H[:, 0, idx, idx] += damping * np.maximum(H[:, 0, idx, idx], 1e-12)
-    ab = np.zeros((k * d, n * d))
-    _kf.blocks_to_lapack_upper(np.ascontiguousarray(H), ab)
-    return solveh_banded(ab, rhs, lower=False, check_finite=False)
+    band = np.zeros((n * d, k * d))
+    _kf.blocks_to_band(np.ascontiguousarray(H), band)
+    return solve_banded_scalar(band, rhs)
 
 
 def difference_coefficients(order_diff):
@@ -68,3 +68,11 @@ def row_weights(sparse, width):
         return np.zeros(0, dtype=bool)
     win = np.lib.stride_tricks.sliding_window_view(sparse, width)
     return win.any(axis=1)
+
+
+def layout(t_first, t_last, knot_spacing_s, order):
+    """Knot layout covering [t_first, t_last] exactly: (t0, dt, n_segments, n_control)."""
+    span = float(t_last - t_first)
+    nseg = max(1, int(round(span / float(knot_spacing_s))))
+    dt = span / nseg if span > 0 else float(knot_spacing_s)
+    return float(t_first), dt, nseg, nseg + order - 1
