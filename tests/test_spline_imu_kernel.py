@@ -172,3 +172,38 @@ def test_knot_table():
     np.testing.assert_array_equal(K[:, KNOT_D:KNOT_D + 3], spl._D)
     np.testing.assert_allclose(K[:, KNOT_ANGLE], np.linalg.norm(spl._D, axis=1), rtol=1e-15)
     assert K[0, KNOT_ANGLE] == 0.0
+
+
+@pytest.mark.parametrize("orders", [(4, 6), (6, 4), (5, 5)])
+def test_separate_position_grid(orders):
+    """Rotation and position on their own grids: the vectorized kernel agrees with the general
+    one, and the position part is the ordinary B-spline of its own control points (scipy)."""
+    from scipy.interpolate import BSpline
+
+    k_rot, k_pos = orders
+    rng = np.random.default_rng(11)
+    n_rot, dt_rot = 12, 0.3
+    rot = random_split_spline(k_rot, 3, n=n_rot)
+    t0 = 0.1
+    span = (n_rot - k_rot + 1) * dt_rot
+    dt_pos = span / 23
+    n_pos = 23 + k_pos - 1
+    pos = np.cumsum(rng.normal(size=(n_pos, 3)), axis=0)
+    spl = Spline(t0, dt_rot, pos, rot.control_rotations, kind="split", order=k_rot, position_t0_s=t0,
+                 position_dt_s=dt_pos, position_order=k_pos)
+    assert abs(spl.t_max_s - (t0 + span)) < 1e-12
+    t = np.r_[rng.uniform(spl.t_min_s, spl.t_max_s, 300), spl.t_min_s, spl.t_max_s]
+    g = np.array([0.2, -0.1, -9.81])
+    gyro, f = spl.imu(t, gravity=g)
+    w_ref, f_ref = general_kernel(spl, t, g)
+    assert_vectors_close(gyro, w_ref, "gyro")
+    assert_vectors_close(f, f_ref, "specific force")
+    # position: scipy's B-spline on the uniform knot vector of the position grid
+    knots = t0 + dt_pos * (np.arange(n_pos + k_pos) - (k_pos - 1))
+    ref = BSpline(knots, pos, k_pos - 1)
+    np.testing.assert_allclose(spl.pose(t)[0], ref(t), rtol=0, atol=1e-11 * np.abs(pos).max())
+    np.testing.assert_allclose(spl.acceleration_world(t), ref.derivative(2)(t), rtol=0,
+                               atol=1e-9 * np.abs(pos).max() / dt_pos**2)
+    # the rotation is that of the rotation grid alone
+    alone = Spline(t0, dt_rot, np.zeros((n_rot, 3)), rot.control_rotations, kind="split", order=k_rot)
+    np.testing.assert_array_equal(spl.rotation_matrix(t), alone.rotation_matrix(t))

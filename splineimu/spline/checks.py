@@ -9,12 +9,13 @@ for a run of poses:
 2. the data jump *into* the run and *out of* it: the first pose of the run departs from the
    linear extrapolation of the two poses before it, and the last from that of the two after,
    by half the run's residual and by :data:`OUTLIER_SIGMAS` robust sigmas of such
-   extrapolation errors over the whole recording. Fast motion is smooth at the pose rate, a
+   extrapolation errors nearby (running median). Fast motion is smooth at the pose rate, a
    glitch is not.
 
 A run that passes (1) and jumps in but not out (or out but not in) is a step (the tracking
 moved its origin): it cannot be dropped and is warned about with its time range, as is a run
-that passes (1) without any jump (motion faster than the spline follows there).
+that passes (1) without any jump (motion faster than the spline follows there), once its
+residual reaches :data:`WARN_RESIDUAL_M` or :data:`WARN_RESIDUAL_RAD`.
 """
 
 from __future__ import annotations
@@ -28,6 +29,9 @@ OUTLIER_SIGMAS = 8.0
 OUTLIER_FLOOR_M = 2e-3
 OUTLIER_FLOOR_RAD = 2e-3
 LOCAL_WINDOW_S = 1.0
+#: Residual runs that are not dropped are warned about from this size on (m, rad).
+WARN_RESIDUAL_M = 5e-3
+WARN_RESIDUAL_RAD = np.radians(1.0)
 #: Runs of outliers longer than this are not glitches (steps, or motion not followed).
 MAX_GLITCH_S = 0.5
 #: Consecutive poses rotating more than this are refused (pi/2: 120 deg cannot be told from -240).
@@ -55,16 +59,19 @@ def _running_median(x, width):
 
 
 def _extrapolation_errors(t, Y):
-    """|Y_i - linear extrapolation from i-2, i-1| (forward) and from i+1, i+2 (backward), (N,) each."""
+    """|Y_i - linear extrapolation from i-2, i-1| (forward) and from i+1, i+2 (backward), (N,) each;
+    zero where the three poses span a gap (more than 3 median spacings between two of them)."""
     n = t.size
     fwd = np.zeros(n)
     bwd = np.zeros(n)
     if n < 3:
         return fwd, bwd
-    a = (t[2:] - t[1:-1]) / (t[1:-1] - t[:-2])
-    fwd[2:] = np.linalg.norm(Y[2:] - Y[1:-1] - a[:, None] * (Y[1:-1] - Y[:-2]), axis=1)
-    b = (t[1:-1] - t[:-2]) / (t[2:] - t[1:-1])
-    bwd[:-2] = np.linalg.norm(Y[:-2] - Y[1:-1] - b[:, None] * (Y[1:-1] - Y[2:]), axis=1)
+    dt = np.diff(t)
+    ok = (np.maximum(dt[1:], dt[:-1]) <= 3.0 * np.median(dt))  # poses i, i+1, i+2 close together
+    a = dt[1:] / dt[:-1]
+    fwd[2:] = np.where(ok, np.linalg.norm(Y[2:] - Y[1:-1] - a[:, None] * (Y[1:-1] - Y[:-2]), axis=1), 0.0)
+    b = dt[:-1] / dt[1:]
+    bwd[:-2] = np.where(ok, np.linalg.norm(Y[:-2] - Y[1:-1] - b[:, None] * (Y[1:-1] - Y[2:]), axis=1), 0.0)
     return fwd, bwd
 
 
@@ -90,26 +97,33 @@ def classify_residuals(t, P, theta, res_pos, res_rot, w):
     width = LOCAL_WINDOW_S / h
     cand = np.zeros(n, dtype=bool)
     score = np.zeros(n)
-    jumps = []
-    for res, Y, floor in ((res_pos, P, OUTLIER_FLOOR_M), (res_rot, theta, OUTLIER_FLOOR_RAD)):
+    parts = []
+    for res, Y, floor, warn in ((res_pos, P, OUTLIER_FLOOR_M, WARN_RESIDUAL_M),
+                                (res_rot, theta, OUTLIER_FLOOR_RAD, WARN_RESIDUAL_RAD)):
         e = np.linalg.norm(res, axis=1)
         sigma = _running_median(np.where(w > 0, e, np.median(e[w > 0])), width) / 1.538
         c = (e > OUTLIER_SIGMAS * sigma) & (e > floor) & (w > 0)
         cand |= c
         score = np.maximum(score, e / np.maximum(OUTLIER_SIGMAS * sigma, floor))
         fwd, bwd = _extrapolation_errors(t, Y)
-        jsig = np.median(fwd[2:]) / 1.538 if n > 3 else 0.0
-        jumps.append((e, fwd, bwd, max(OUTLIER_SIGMAS * jsig, floor)))
+        # jumps are judged against the local size of such extrapolation errors (fast motion has
+        # larger ones), by the same number of robust sigmas
+        jmin = np.maximum(OUTLIER_SIGMAS * _running_median(fwd, width) / 1.538, floor)
+        parts.append((e, fwd, bwd, jmin, warn))
     for a, b in _runs(cand):
         t0, t1 = float(t[a]), float(t[b - 1])
-        jin = jout = False
-        for e, fwd, bwd, jmin in jumps:
-            big = float(e[a:b].max())
-            jin |= a == 0 or (fwd[a] > max(0.5 * big, jmin))
-            jout |= b == n or (bwd[b - 1] > max(0.5 * big, jmin))
+        jin = jout = inside = big = False
+        for e, fwd, bwd, jmin, warn in parts:
+            top = float(e[a:b].max())
+            jin |= a == 0 or bool(fwd[a] > max(0.5 * top, jmin[a]))
+            jout |= b == n or bool(bwd[b - 1] > max(0.5 * top, jmin[b - 1]))
+            inside |= bool(np.any(fwd[a:b + 1] > np.maximum(0.25 * top, jmin[a:b + 1])))
+            big |= top >= warn
         if jin and jout and (t1 - t0) <= MAX_GLITCH_S and (b - a) < 0.5 * n:
             drop[a:b] = cand[a:b] | (score[a:b] > 0.5)
-        elif jin or jout or any(np.max(fwd[a:b + 1]) > jmin for _, fwd, _, jmin in jumps):
+        elif not big:
+            continue
+        elif jin or jout or inside:
             warnings.append(FitWarning(
                 "unexplained_jump", f"the poses jump between {t0:.3f} s and {t1:.3f} s and the fit cannot follow "
                 "(a step of the tracking?): the synthesized IMU is wrong there", t0, t1))

@@ -240,53 +240,68 @@ def _best(table, orders):
     return k_best, best[k_best][1], best
 
 
-def _ladder_errors(windows, k, ladder, block, r):
-    """Predicted r-th derivative error at the spacings ``ladder[1:]`` of a geometric ladder,
-    from fits to alternate halves of the blocks (A, B): the noise part is ``|d_A - d_B|^2 / 4``;
-    the bias part is the change from the rung below, ``(d_A - d_A') . (d_B - d_B')``, whose
-    noise averages out of the product (A and B see independent noise). Returns (noise variance,
-    bias^2, per-window noise profiles) for each rung above the first."""
+def motion_limited(X):
+    """True when the top of the band holds motion rather than noise: the power of the second
+    differences falls toward the Nyquist frequency (per octave: [1/8, 1/4] and [1/4, 1/2] of
+    the band at least 3x and 1.5x the top octave), as for exact, low-rate or re-estimated poses.
+    White noise rises there (f^4), coloured and upsampled noise stay within those ratios."""
+    if X.shape[0] < 64:
+        return False
+    d = np.diff(X, 2, axis=0)
+    P = (np.abs(np.fft.rfft(d - d.mean(axis=0), axis=0)) ** 2).sum(axis=1)
+    n = P.size
+    low, mid, top = (P[n * a // 8: n * b // 8].mean() for a, b in ((1, 2), (2, 4), (4, 8)))
+    return bool(low > 3.0 * top and mid > 1.5 * top)
+
+
+def _noise_surrogate(wd, k, dt_cv, seed=7):
+    """A noise series (N, 3) with the spectrum of the pose noise, for propagation through fits.
+
+    The residual of the fit at the value-optimal spacing is noise above the fit's cut-off (about
+    ``1 / (2 dt)``); its smoothed periodogram is kept above ``1 / dt`` and continued flat below
+    (white, AR(1)-coloured and upsampled noise are all flat there), and a series with that
+    spectrum and random phases is drawn.
+    """
+    zero = np.zeros(wd.t.size, dtype=np.int64)
+    res = wd.X - wd.derivative(k, dt_cv, zero, 1, 0)[0]
+    res = res - res.mean(axis=0)
+    n = res.shape[0]
+    F = np.fft.rfft(res, axis=0)
+    P = np.abs(F) ** 2
+    width = max(8, P.shape[0] // 256)
+    kernel = np.ones(width) / width
+    P = np.column_stack([np.convolve(P[:, j], kernel, mode="same") for j in range(3)])
+    h = float(np.median(np.diff(wd.t)))
+    f = np.fft.rfftfreq(n, h)
+    above = np.flatnonzero(f >= 1.0 / dt_cv)
+    if above.size:
+        P[: above[0]] = P[above[0]]
+    else:
+        P[:] = P[-1]
+    phase = np.exp(2j * np.pi * np.random.default_rng(seed).random(P.shape))
+    phase[0] = 1.0
+    return np.fft.irfft(np.sqrt(P) * phase, n, axis=0)
+
+
+def _ladder_errors(windows, k, ladder, noises, r):
+    """Predicted r-th derivative error at the spacings ``ladder[1:]`` of a geometric ladder.
+
+    Each rung fits the signal and the noise surrogate together (one system, six columns): the
+    noise part is the surrogate fit's derivative; the bias part is the change of the signal
+    fit's derivative from the rung below, less that of the surrogate fit's. Returns (noise
+    variance, bias^2, per-window noise profiles) for each rung above the first.
+    """
     var = np.zeros(len(ladder))
     bias2 = np.zeros(len(ladder))
     ends = []
     prev = [None] * len(windows)
-    for j, dt in enumerate(ladder):
-        nsc = 0
-        cross = 0.0
-        e_list = []
-        for i, wd in enumerate(windows):
-            d = wd.derivative(k, dt, (wd.folds(block) % 2).astype(np.int64), 2, r)
-            e2 = np.sum((d[0] - d[1]) ** 2, axis=1) / 4.0
-            var[j] += float(np.sum(e2[wd.scored]))
-            nsc += int(np.count_nonzero(wd.scored))
-            if prev[i] is not None:
-                D = d[:, wd.scored] - prev[i]
-                cross += float(np.sum(D[0] * D[1]))
-            prev[i] = d[:, wd.scored]
-            e_list.append((wd.t, e2))
-        var[j] /= max(nsc, 1)
-        bias2[j] = max(cross / max(nsc, 1), 0.0)
-        ends.append(e_list)
-    return var[1:], bias2[1:], ends[1:]
-
-
-def _ladder_errors_white(windows, k, ladder, sigma, r):
-    """As :func:`_ladder_errors` for white noise of level ``sigma``: each rung fits the signal
-    and a drawn white noise of that level together; the noise part is the noise fit's
-    derivative, the bias part the change of the signal fit's derivative from the rung below
-    less that of the noise fit's."""
-    var = np.zeros(len(ladder))
-    bias2 = np.zeros(len(ladder))
-    ends = []
-    prev = [None] * len(windows)
-    noise = [sigma * np.random.default_rng(7).normal(size=wd.X.shape) for wd in windows]
     for j, dt in enumerate(ladder):
         nsc = 0
         change = 0.0
         e_list = []
         for i, wd in enumerate(windows):
             zero = np.zeros(wd.t.size, dtype=np.int64)
-            d = wd.derivative(k, dt, zero, 1, r, np.ascontiguousarray(np.hstack([wd.X, noise[i]])))[0]
+            d = wd.derivative(k, dt, zero, 1, r, np.ascontiguousarray(np.hstack([wd.X, noises[i]])))[0]
             e2 = np.sum(d[:, 3:] ** 2, axis=1)
             var[j] += float(np.sum(e2[wd.scored]))
             nsc += int(np.count_nonzero(wd.scored))
@@ -323,23 +338,22 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf):
     if (1 if lag <= 1 else 3 * lag) != block:
         block = 1 if lag <= 1 else 3 * lag
         table = _search(windows, orders, grid, block, lo, hi)
-    # 2. per order, the derivative's error on a ladder around the value-optimal spacing; white
-    # noise (uncorrelated residual) is propagated by fitting a drawn noise of the level that the
-    # cross-validation measured, correlated noise by fits to alternate halves of the blocks
-    white = block == 1
+    # 2. per order, the derivative's error on a ladder around the value-optimal spacing, with a
+    # surrogate of the pose noise (spectrum from the residual) propagated through the same fits
     k_cv, dt_cvb = _best(table, orders)[:2]
-    sigma = float(np.sqrt(table[(k_cv, dt_cvb)] / 3.0))
+    noises = [_noise_surrogate(wd, k_cv, dt_cvb) for wd in windows]
+    limited = dt_fixed is None and all(motion_limited(wd.X) for wd in windows)
+    if limited:
+        # the residual is mostly motion the fit missed, not noise: look at finer spacings
+        noises = [0.1 * nz for nz in noises]
     rows = []
     best = None
     for k in orders:
         dt_cv = min((v, dt) for (kk, dt), v in table.items() if kk == k)[1]
-        steps = np.arange(-2, 3) if dt_fixed is None else np.arange(-1, 1)
+        steps = np.arange(-1, 1) if dt_fixed is not None else (np.arange(-4, 1) if limited else np.arange(-2, 3))
         ladder = dt_cv * _LADDER ** steps
         ladder = np.r_[ladder[0], ladder[1:][(ladder[1:] >= lo * 0.99) & (ladder[1:] <= hi * (1.0 + 1e-9))]]
-        if white:
-            var, bias2, ends = _ladder_errors_white(windows, k, ladder, sigma, r)
-        else:
-            var, bias2, ends = _ladder_errors(windows, k, ladder, block, r)
+        var, bias2, ends = _ladder_errors(windows, k, ladder, noises, r)
         pred = np.sqrt(var + bias2)
         for j, dt in enumerate(ladder[1:]):
             rows.append({"order": k, "knot_spacing_s": float(dt), "predicted_rms": float(pred[j]),
@@ -355,11 +369,9 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf):
     head = t_a <= t_a[0] + zone
     tail = t_b >= t_b[-1] - zone
     end_rms = float(np.sqrt(max(np.mean(e_a[head]), np.mean(e_b[tail])) + pred**2 - var))
-    if not white and dt < 2.0 * block * h:
-        end_rms = pred  # the half fits are not determined at the ends: no estimate there
     return {
         "order": k, "knot_spacing_s": dt, "cv_knot_spacing_s": dt_cv,
-        "block_poses": int(block), "noise_correlation_poses": int(lag),
+        "block_poses": int(block), "noise_correlation_poses": int(lag), "motion_limited": bool(limited),
         "predicted_rms": pred, "predicted_noise_rms": float(np.sqrt(var)),
         "cv_rms": float(np.sqrt(table[(k, dt_cv)])), "end_zone_s": float(zone), "end_predicted_rms": end_rms,
         "candidates": rows,
