@@ -64,21 +64,13 @@ def _mm(A, B, C, transpose_a=False):
 
 
 @jit
-def position_normal_equations(s_all, w_all, P_meas, Mc_plain, nseg, H, rhs):
-    """Split spline position: H (n, k) banded scalar blocks, rhs (n, 3); plain basis."""
-    k = Mc_plain.shape[0]
-    b = np.empty(k)
-    bd = np.empty(k)
-    for m in range(s_all.shape[0]):
-        seg, u = _segment(s_all[m], nseg)
-        basis_into(Mc_plain, u, 1.0, b, bd, bd)
-        w = w_all[m]
-        for a in range(k):
-            wa = w * b[a]
-            for c in range(k - a):
-                H[seg + a, c] += wa * b[a + c]
-            for d in range(3):
-                rhs[seg + a, d] += wa * P_meas[m, d]
+def _add_product(X, B, E, out, sign):
+    """``out += sign * X @ B`` for square matrices (``E`` scratch)."""
+    _mm(X, B, E)
+    d = E.shape[0]
+    for r0 in range(d):
+        for c0 in range(d):
+            out[r0, c0] += sign * E[r0, c0]
 
 
 @jit
@@ -157,22 +149,14 @@ def so3_normal_equations(s_all, w_all, R_meas, Rc, D, Mc, nseg, H, g, res):
                     X[r0, c0] *= b[j]
             # + X Jr^-1(d_j) on delta_{s+j}
             so3_jacobian_inv_into(dj0, dj1, dj2, -1.0, Jinv)
-            _mm(X, Jinv, E)
-            for r0 in range(3):
-                for c0 in range(3):
-                    G[j, r0, c0] += E[r0, c0]
+            _add_product(X, Jinv, E, G[j], 1.0)
             # - X Jl^-1(d_j) on delta_{s+j-1}
             so3_jacobian_inv_into(dj0, dj1, dj2, 1.0, Jinv)
-            _mm(X, Jinv, E)
-            for r0 in range(3):
-                for c0 in range(3):
-                    G[j - 1, r0, c0] -= E[r0, c0]
+            _add_product(X, Jinv, E, G[j - 1], -1.0)
         # Jm_i = -Jl^-1(r) G_i
+        Jm[:] = 0.0
         for i in range(k):
-            _mm(Jl_inv_r, G[i], E)
-            for r0 in range(3):
-                for c0 in range(3):
-                    Jm[i, r0, c0] = -E[r0, c0]
+            _add_product(Jl_inv_r, G[i], E, Jm[i], -1.0)
         _accumulate(Jm, r, 0, 3, w, seg, H, g)
     return cost
 
@@ -315,20 +299,12 @@ def se3_normal_equations(s_all, w6, R_meas, p_meas, Rc, pc, D, Mc, nseg, H, g, r
                 for c0 in range(6):
                     X[r0, c0] *= b[j]
             _se3_jac_into(D[seg + j], -1.0, True, Jinv, scratch, Q, S3)
-            _mm(X, Jinv, E)
-            for r0 in range(6):
-                for c0 in range(6):
-                    G[j, r0, c0] += E[r0, c0]
+            _add_product(X, Jinv, E, G[j], 1.0)
             _se3_jac_into(D[seg + j], 1.0, True, Jinv, scratch, Q, S3)
-            _mm(X, Jinv, E)
-            for r0 in range(6):
-                for c0 in range(6):
-                    G[j - 1, r0, c0] -= E[r0, c0]
+            _add_product(X, Jinv, E, G[j - 1], -1.0)
+        Jm[:] = 0.0
         for i in range(k):
-            _mm(Jl_inv_r, G[i], E)
-            for r0 in range(6):
-                for c0 in range(6):
-                    Jm[i, r0, c0] = -E[r0, c0]
+            _add_product(Jl_inv_r, G[i], E, Jm[i], -1.0)
         # translation and rotation rows carry one weight each
         _accumulate(Jm, r, 0, 3, w6[m, 0], seg, H, g)
         _accumulate(Jm, r, 3, 6, w6[m, 3], seg, H, g)

@@ -92,6 +92,14 @@ def _transpose_times(A, x0, x1, x2):
 
 
 @jit(inline="always")
+def _times(A, x0, x1, x2):
+    """``A x`` for a 3x3 matrix and a vector given by its components."""
+    return (A[0, 0] * x0 + A[0, 1] * x1 + A[0, 2] * x2,
+            A[1, 0] * x0 + A[1, 1] * x1 + A[1, 2] * x2,
+            A[2, 0] * x0 + A[2, 1] * x1 + A[2, 2] * x2)
+
+
+@jit(inline="always")
 def _times_right(R, A, T):
     """``R <- R A`` for 3x3 matrices (``T`` scratch)."""
     for r in range(3):
@@ -108,6 +116,13 @@ def _times_right(R, A, T):
 
 
 @jit(inline="always")
+def _write_vector(i, x0, x1, x2, out):
+    out[i, 0] = x0
+    out[i, 1] = x1
+    out[i, 2] = x2
+
+
+@jit(inline="always")
 def _write_outputs(i, want, R, q, p0, p1, p2, w0, w1, w2, a0, a1, a2, out_R, out_q, out_p, out_w, out_wd):
     """Rotation, quaternion (x, y, z, w), position, body rate and its derivative of sample ``i``."""
     if want & WANT_ROT:
@@ -121,17 +136,11 @@ def _write_outputs(i, want, R, q, p0, p1, p2, w0, w1, w2, a0, a1, a2, out_R, out
         out_q[i, 2] = q[3]
         out_q[i, 3] = q[0]
     if want & WANT_POS:
-        out_p[i, 0] = p0
-        out_p[i, 1] = p1
-        out_p[i, 2] = p2
+        _write_vector(i, p0, p1, p2, out_p)
     if want & WANT_OMEGA:
-        out_w[i, 0] = w0
-        out_w[i, 1] = w1
-        out_w[i, 2] = w2
+        _write_vector(i, w0, w1, w2, out_w)
     if want & WANT_ALPHA:
-        out_wd[i, 0] = a0
-        out_wd[i, 1] = a1
-        out_wd[i, 2] = a2
+        _write_vector(i, a0, a1, a2, out_wd)
 
 
 @jit
@@ -234,19 +243,13 @@ def eval_split(s_all, nseg, dt, Rc, D, Mc, sp_all, nseg_p, dt_p, Pc, M, g, want,
                 w2 = r2 + e2
         _write_outputs(i, want, R, q, p0, p1, p2, w0, w1, w2, a0, a1, a2, out_R, out_q, out_p, out_w, out_wd)
         if want & WANT_VEL:
-            out_v[i, 0] = v0
-            out_v[i, 1] = v1
-            out_v[i, 2] = v2
+            _write_vector(i, v0, v1, v2, out_v)
         if want & WANT_ACC:
-            out_a[i, 0] = c0
-            out_a[i, 1] = c1
-            out_a[i, 2] = c2
+            _write_vector(i, c0, c1, c2, out_a)
         if want & WANT_FORCE:
             if need_rot:
                 f0, f1, f2 = _transpose_times(R, h0, h1, h2)
-            out_f[i, 0] = f0
-            out_f[i, 1] = f1
-            out_f[i, 2] = f2
+            _write_vector(i, f0, f1, f2, out_f)
 
 
 @jit
@@ -335,19 +338,16 @@ def eval_se3(s_all, nseg, dt, Rc, D, Pc, Mc, M, g, want,
         # world velocity R v_b; world acceleration R (w x v + dv)
         _write_outputs(i, want, R, q, p0, p1, p2, w0, w1, w2, dw0, dw1, dw2, out_R, out_q, out_p, out_w, out_wd)
         if want & WANT_VEL:
-            out_v[i, 0] = R[0, 0] * v0 + R[0, 1] * v1 + R[0, 2] * v2
-            out_v[i, 1] = R[1, 0] * v0 + R[1, 1] * v1 + R[1, 2] * v2
-            out_v[i, 2] = R[2, 0] * v0 + R[2, 1] * v1 + R[2, 2] * v2
+            x0, x1, x2 = _times(R, v0, v1, v2)
+            _write_vector(i, x0, x1, x2, out_v)
         if want & (WANT_ACC | WANT_FORCE):
             ab0 = (w1 * v2 - w2 * v1) + dv0
             ab1 = (w2 * v0 - w0 * v2) + dv1
             ab2 = (w0 * v1 - w1 * v0) + dv2
             if want & WANT_ACC:
-                out_a[i, 0] = R[0, 0] * ab0 + R[0, 1] * ab1 + R[0, 2] * ab2
-                out_a[i, 1] = R[1, 0] * ab0 + R[1, 1] * ab1 + R[1, 2] * ab2
-                out_a[i, 2] = R[2, 0] * ab0 + R[2, 1] * ab1 + R[2, 2] * ab2
+                x0, x1, x2 = _times(R, ab0, ab1, ab2)
+                _write_vector(i, x0, x1, x2, out_a)
             if want & WANT_FORCE:
                 # f_b = R^T (a_w - g) = a_b - R^T g
-                out_f[i, 0] = ab0 - (R[0, 0] * g[0] + R[1, 0] * g[1] + R[2, 0] * g[2])
-                out_f[i, 1] = ab1 - (R[0, 1] * g[0] + R[1, 1] * g[1] + R[2, 1] * g[2])
-                out_f[i, 2] = ab2 - (R[0, 2] * g[0] + R[1, 2] * g[1] + R[2, 2] * g[2])
+                y0, y1, y2 = _transpose_times(R, g[0], g[1], g[2])
+                _write_vector(i, ab0 - y0, ab1 - y1, ab2 - y2, out_f)

@@ -162,7 +162,8 @@ class _Problem:
         Hs = np.zeros((n, k))
         rhs = np.zeros((n, 3))
         w = self.w * self.w_pos
-        _kf.position_normal_equations(self.s, w, self.P, self.M, self.nseg, Hs, rhs)
+        _kf.fold_normal_equations(self.s, w, np.zeros(self.t.size, dtype=np.int64), self.P, self.M, self.nseg,
+                                  Hs[None], rhs[None])
         r = min(3, k - 1)
         add_position_penalty(Hs, self._mu(r + 1) * self.w_pos, r)
         return solve_banded_scalar(Hs, rhs)

@@ -257,28 +257,36 @@ def motion_limited(X):
 def _noise_surrogate(wd, k, dt_cv, seed=7):
     """A noise series (N, 3) with the spectrum of the pose noise, for propagation through fits.
 
-    The residual of the fit at the value-optimal spacing is noise above the fit's cut-off (about
-    ``1 / (2 dt)``); its smoothed periodogram is kept above ``1 / dt`` and continued flat below
-    (white, AR(1)-coloured and upsampled noise are all flat there), and a series with that
-    spectrum and random phases is drawn.
+    The residual of the fit at the value-optimal spacing is the pose noise times the fit's
+    residual transfer ``(1 - H(f))^2`` (and motion the fit misses); that transfer is measured
+    by passing a white draw through the same fit. The residual's smoothed periodogram divided by
+    it estimates the noise spectrum where the transfer is at least 0.2 (from about the fit's
+    cut-off up), and is continued flat below (white, AR(1)-coloured and upsampled noise are
+    all flat there). A series with that spectrum and random phases is drawn.
     """
+    rng = np.random.default_rng(seed)
+    white = rng.normal(size=wd.X.shape)
     zero = np.zeros(wd.t.size, dtype=np.int64)
-    res = wd.X - wd.derivative(k, dt_cv, zero, 1, 0)[0]
-    res = res - res.mean(axis=0)
+    both = np.ascontiguousarray(np.hstack([wd.X, white]))
+    res = both - wd.derivative(k, dt_cv, zero, 1, 0, both)[0]
+    res -= res.mean(axis=0)
     n = res.shape[0]
-    F = np.fft.rfft(res, axis=0)
-    P = np.abs(F) ** 2
-    width = max(8, P.shape[0] // 256)
+    width = max(8, (n // 2) // 256)
     kernel = np.ones(width) / width
-    P = np.column_stack([np.convolve(P[:, j], kernel, mode="same") for j in range(3)])
-    h = float(np.median(np.diff(wd.t)))
-    f = np.fft.rfftfreq(n, h)
-    above = np.flatnonzero(f >= 1.0 / dt_cv)
-    if above.size:
-        P[: above[0]] = P[above[0]]
-    else:
-        P[:] = P[-1]
-    phase = np.exp(2j * np.pi * np.random.default_rng(seed).random(P.shape))
+
+    def spectrum(x):
+        P = np.abs(np.fft.rfft(x, axis=0)) ** 2
+        return np.column_stack([np.convolve(P[:, j], kernel, mode="same") for j in range(x.shape[1])])
+
+    P = spectrum(res[:, :3])
+    gain = spectrum(res[:, 3:]) / np.maximum(spectrum(white), 1e-300)
+    gain = np.mean(gain, axis=1)
+    ok = np.flatnonzero(gain >= 0.2)
+    if ok.size:
+        first = ok[0]
+        P[first:] /= np.maximum(gain[first:, None], 0.2)
+        P[:first] = P[first]
+    phase = np.exp(2j * np.pi * rng.random(P.shape))
     phase[0] = 1.0
     return np.fft.irfft(np.sqrt(P) * phase, n, axis=0)
 
@@ -332,12 +340,18 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf):
         grid = np.array([float(dt_fixed)])
     # 1. cross-validation with 0.1 s blocks, then with blocks of 3 noise correlation times
     block = max(1, int(round(0.1 / h)))
-    table = _search(windows, orders, grid, block, lo, hi)
-    k0, dt0, _ = _best(table, orders)
+    k_first = 4 if 4 in orders else orders[0]
+    table = _search(windows, (k_first,), grid, block, lo, hi)
+    k0, dt0, _ = _best(table, (k_first,))
     lag = _correlation_lag(np.vstack([wd.residual(k0, dt0) for wd in windows]))
+    # the second pass looks within 4x of the first choice (leaks of correlated noise through
+    # 0.1 s blocks move it by less)
+    near = grid[(grid >= dt0 / 4.0) & (grid <= dt0 * 4.0)] if grid.size > 1 else grid
     if (1 if lag <= 1 else 3 * lag) != block:
         block = 1 if lag <= 1 else 3 * lag
-        table = _search(windows, orders, grid, block, lo, hi)
+        table = _search(windows, orders, near, block, lo, hi)
+    else:
+        table.update(_search(windows, tuple(k for k in orders if k != k_first), near, block, lo, hi))
     # 2. per order, the derivative's error on a ladder around the value-optimal spacing, with a
     # surrogate of the pose noise (spectrum from the residual) propagated through the same fits
     k_cv, dt_cvb = _best(table, orders)[:2]
