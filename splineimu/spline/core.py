@@ -38,7 +38,10 @@ class Spline(MotionSource):
       ``T(t) = T_i prod_{j=1}^{k-1} Exp(Btilde_j(u) Log(T_{i+j-1}^-1 T_{i+j}))``.
     - ``"split"``: the same cumulative product on SO3 for the rotation, and an ordinary
       B-spline ``p(t) = sum_j B_j(u) p_{i+j}`` for the position, so that translation and
-      rotation are decoupled and the world acceleration is the basis' second derivative.
+      rotation are decoupled and the world acceleration is the basis' second derivative. The
+      position may have its own grid (``position_t0_s``, ``position_dt_s``,
+      ``position_order``; its own ``u`` and segment), so that rotation and position are
+      smoothed independently; the valid range is then the intersection of both.
 
     ``B(u) = M [1, u, ..., u^(k-1)]`` with the blending matrix ``M`` of
     :func:`splineimu.spline.basis.blending_matrix`; ``Btilde`` uses the cumulative matrix.

@@ -1,49 +1,53 @@
-"""Automatic knot spacing and order: blocked cross-validation on held-out poses.
+"""Automatic knot spacing and order, for rotation and position independently.
 
-Rotation and position are chosen independently, each on its own R3 signal: the control
-positions of the position spline, and for the rotation the accumulated body-frame increments
-``theta_m = sum_{l <= m} Log(R_{l-1}^T R_l)`` (white pose noise stays white in it, and its time
-derivative is the body rate).
+Each part is chosen on its own R3 signal: the control positions of the position spline, and
+for the rotation the accumulated body-frame increments ``theta_m = sum_{l <= m} Log(R_{l-1}^T
+R_l)`` (white pose noise stays white in it, and its time derivative is the body rate). The
+target is the error of the derivative the IMU sees: the accelerometer (2nd derivative of the
+position) and the gyroscope (1st derivative of theta).
 
 Method
 ------
-For each order ``k`` in {4, 5, 6} and each knot spacing ``dt`` of a log-spaced grid (from 0.7
-times the median pose spacing, no floor at the pose spacing, to a quarter of the span; coarse
-steps of 1.6x, then a finer step around the best), the poses are split into blocks of
-consecutive samples, the blocks are dealt to 4 folds in turn, and each fold is predicted by the
-spline fitted to the other three. The score is the mean squared prediction error of the
-held-out poses, away from the ends. No noise model is needed: noise that is white, coloured or
-upsampled only has to be independent between a held-out block and its training neighbours,
-which the block length ensures. The block length is set from the data in two passes: a first
-choice with 0.1 s blocks, then the residual of that fit gives the noise correlation time (the
-lag where its autocorrelation falls below 0.1), and blocks of 3 correlation times (at least 2
-poses) give the final choice.
+1. **Blocked cross-validation** on held-out poses gives the value-optimal spacing per order
+   (4, 5, 6): consecutive poses are grouped in blocks, the blocks dealt to 4 folds in turn, and
+   each fold predicted by the spline fitted to the other three; the score is the mean squared
+   prediction error away from the ends. The grid runs from 0.7x the median pose spacing (no
+   floor at twice the pose spacing) to a quarter of the span, coarse steps of 1.6x and a finer
+   step around the best. The block length comes from the data: a first pass with 0.1 s blocks,
+   whose residual gives the noise correlation time (the lag where its autocorrelation falls
+   below 0.1); blocks of 3 correlation times (1 pose for white noise) then keep correlated or
+   upsampled noise of a held-out block independent of its training neighbours.
+2. **A noise surrogate**: the residual of that fit is the pose noise times the fit's residual
+   transfer, which is measured by passing a white draw through the same fit; dividing the
+   residual's periodogram by it estimates the noise spectrum from about the fit's cut-off up,
+   continued flat below (white, AR(1) and upsampled noise are flat there). A series with that
+   spectrum is drawn.
+3. **The derivative's error on a ladder** of spacings (steps of 1.25x around the value-optimal
+   one, per order): signal and surrogate are fitted together; the noise part is the surrogate
+   fit's derivative, the bias part the change of the signal fit's derivative from the rung
+   below less the surrogate's change. The (order, spacing) with the smallest predicted error
+   wins, and that prediction is reported (``predicted_gyro_rms_rad_s``,
+   ``predicted_accel_rms_m_s2``); the same profile over the first and last ``k`` spacings gives
+   the error at the ends.
+4. **Low-rate or re-estimated input** (the power of the second differences falls toward the
+   Nyquist frequency: the top of the band holds motion, not noise, :func:`motion_limited`) is
+   searched at finer spacings, down to below the pose spacing, with a tenth of the surrogate.
+5. The rotation spacing never exceeds the time in which the input turns by 60 degrees
+   (:func:`max_rotation_spacing`): control rotations further apart cannot be told from the
+   opposite turn.
 
-Cross-validation scores the poses themselves (the 0th derivative); the gyro (1st) and the
-accelerometer (2nd) are best at a somewhat larger spacing. Where the score is limited by noise
-(its minimum is inside the grid), the spacing is scaled by the ratio of the derivative-optimal
-to the value-optimal spacing of a power-law bias against a white-noise variance,
-``((2r + 1) k / (k - r))^(1 / (2k + 1))`` (1.17 for the gyro and 1.29 for the accelerometer at
-k = 4), and the order by the best score with a 2% preference for higher orders.
+Cost: per (order, spacing) one pass over the poses for the normal equations of all folds,
+banded Cholesky solves of the control-point size and one pass for the predictions; inputs
+longer than :data:`MAX_CV_POSES` are cross-validated on evenly spread windows (the spacing is
+a local property), so the choice costs the same for a minute and for an hour.
 
-Predicted errors of the chosen spline come from two fits to alternate halves of the blocks
-(``A`` and ``B``): their derivatives differ only by noise, so ``|d_A - d_B|^2 / 4`` estimates
-the noise part of the full fit's derivative error (coloured noise included, as long as the
-blocks are longer than its correlation time); at a noise-limited optimum the bias adds
-``(2r + 1) / (2 (k - r))`` of that (the same power law). Where the choice is limited by the
-motion instead (clean or low-rate input), the bias is estimated from the change of the
-derivative between ``dt`` and ``dt / 1.6``.
-
-Cost: one pass over the poses per (order, spacing) for the normal equations of all folds,
-four banded solves of the control-point size, and one pass for the predictions; inputs longer
-than :data:`MAX_CV_POSES` are cross-validated on evenly spread windows (the spacing is a
-local property), so the choice costs the same for a minute and for an hour.
-
-Where it fails: noise correlated over longer than the motion's own time scale is motion to any
-method that sees only the poses (it is kept); a trajectory whose character changes along the
-recording (rest, then fast motion) gets one spacing per quantity for the whole of it; blocks
-shorter than the correlation time of the noise (correlation estimated from a first fit) let
-the noise leak into the prediction and favour too small a spacing.
+Where it fails: noise correlated over longer than the motion's own time scale is motion to
+any method that sees only the poses (it is kept); noise whose level changes along the
+recording (tracking worse during fast motion) is estimated as its average, so the fast parts
+get too little smoothing (BROAD 09: the synthesized gyro holds more above 15 Hz than the real
+IMU); a trajectory whose character changes (rest, then fast motion) gets one spacing per
+quantity for the whole of it; smooth input sampled so sparsely that its top octave holds
+neither noise nor motion is taken as noise-limited.
 """
 
 from __future__ import annotations
@@ -68,7 +72,8 @@ N_FOLDS = 4
 #: Longer inputs are cross-validated on windows totalling about this many poses.
 MAX_CV_POSES = 24_000
 _N_WINDOWS = 6
-#: Coarse step of the spacing grid, and how much better (relatively) a lower order must score.
+#: Coarse step of the spacing grid, and how much better (relatively) a lower order must score
+#: in the first cross-validation pass.
 _STEP = 1.6
 _ORDER_PREFERENCE = 0.02
 #: The rotation spline's neighbouring control rotations may turn by at most this at the
@@ -80,17 +85,6 @@ _LADDER = 1.25
 _END_FRACTION = 0.05
 #: The residual autocorrelation below which noise counts as uncorrelated.
 _ACF_LEVEL = 0.1
-
-
-def derivative_factor(order, r):
-    """Ratio of the spacing optimal for the r-th derivative to the value-optimal spacing."""
-    k = int(order)
-    return float(((2 * r + 1) * k / (k - r)) ** (1.0 / (2 * k + 1)))
-
-
-def bias_share(order, r):
-    """Bias^2 / variance of the r-th derivative at its optimal spacing (power-law bias)."""
-    return (2 * r + 1) / (2.0 * (order - r))
 
 
 def max_rotation_spacing(t, R):
