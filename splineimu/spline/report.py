@@ -76,7 +76,9 @@ class FitReport:
                 f"{self.position_order}, knot spacing {self.position_knot_spacing_s * 1e3:.3f} ms"
                 if self.kind == "split" else f"order {self.order}, knot spacing {self.knot_spacing_s * 1e3:.3f} ms")
         lines = [
-            f"spline        {self.kind}, {grid} ({self.knot_spacing_source}), {self.n_control} control poses",
+            f"spline        {self.kind}, {grid} ({self.knot_spacing_source}), "
+            + (f"{self.n_control} control rotations, {self.n_position_control} control positions"
+               if self.kind == "split" else f"{self.n_control} control poses"),
             f"fit residual  position rms {self.residual_position_rms_m * 1e3:.4f} mm "
             f"(max {self.residual_position_max_m * 1e3:.4f} mm), angle rms "
             f"{np.degrees(self.residual_angle_rms_rad):.5f} deg "
