@@ -363,18 +363,6 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf):
         ladder = np.r_[ladder[0], ladder[1:][(ladder[1:] >= lo * 0.99) & (ladder[1:] <= hi * (1.0 + 1e-9))]]
         var, bias2, ends = _ladder_errors(windows, k, ladder, noises, r)
         pred = np.sqrt(var + bias2)
-        # the best at the top rung: climb further (two rungs at a time, up to 6)
-        for _ in range(3):
-            if dt_fixed is not None or pred.size < 2 or int(np.argmin(pred)) != pred.size - 1:
-                break
-            more = ladder[-1] * _LADDER ** np.arange(0, 3)
-            more = more[more <= hi * (1.0 + 1e-9)]
-            if more.size < 2:
-                break
-            v2, b2, e2 = _ladder_errors(windows, k, more, noises, r)
-            ladder = np.r_[ladder, more[1:]]
-            var, bias2, ends = np.r_[var, v2], np.r_[bias2, b2], ends + e2
-            pred = np.sqrt(var + bias2)
         for j, dt in enumerate(ladder[1:]):
             rows.append({"order": k, "knot_spacing_s": float(dt), "predicted_rms": float(pred[j]),
                          "predicted_noise_rms": float(np.sqrt(var[j])), "cv_knot_spacing_s": float(dt_cv)})
