@@ -20,23 +20,6 @@ from .imu.ideal import Extrinsic, IdealImu, ideal_imu
 from .motion import DEFAULT_GRAVITY, MotionSource
 
 
-def uniform_stamps_ns(start_ns: int, end_ns: int, rate_hz: float) -> np.ndarray:
-    """Integer-nanosecond stamps ``start + round(k 1e9 / rate)`` that lie in [start, end]."""
-    rate_hz = float(rate_hz)
-    if not (np.isfinite(rate_hz) and rate_hz > 0):
-        raise SplineImuError(f"rate must be positive, got {rate_hz}")
-    span = int(end_ns) - int(start_ns)
-    if span < 0:
-        raise SplineImuError("empty time span")
-    n = int(np.floor(span * rate_hz / 1e9 + 1e-9)) + 1
-    k = np.arange(n, dtype=np.int64)
-    if (1e9 / rate_hz).is_integer():
-        off = k * np.int64(int(1e9 / rate_hz))
-    else:
-        off = np.round(k.astype(np.float64) * (1e9 / rate_hz)).astype(np.int64)
-    return np.int64(start_ns) + off[off <= span]
-
-
 @dataclass
 class Synthesis:
     """Synthesized IMU data with its exact ground truth.
@@ -406,17 +389,12 @@ def _json_default(o):
 
 
 def _write_imu_yaml(path, syn):
+    """The sensor model used; for noise-free data the Kalibr keys at zero and the rate synthesized."""
+    from .imu.config import ImuConfig
+
     if syn.imu_config is not None:
         syn.imu_config.to_yaml(path)
         return
-    rate = float(1e9 / np.median(np.diff(syn.t_ns))) if syn.t_ns.size > 1 else 0.0
-    text = (
-        "# noise-free synthesis: no sensor model was given (use --imu IMU.yaml or a preset)\n"
-        "gyroscope_noise_density: 0.0\n"
-        "gyroscope_random_walk: 0.0\n"
-        "accelerometer_noise_density: 0.0\n"
-        "accelerometer_random_walk: 0.0\n"
-        f"update_rate: {rate:.12g}\n"
-    )
-    with open(path, "w") as fh:
-        fh.write(text)
+    rate = float(1e9 / np.median(np.diff(syn.t_ns))) if syn.t_ns.size > 1 else None
+    ImuConfig(update_rate=rate).to_yaml(
+        path, header="noise-free synthesis: no sensor model was given (use --imu IMU.yaml or a preset)")

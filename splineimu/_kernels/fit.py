@@ -20,8 +20,10 @@ import numpy as np
 
 from .._jit import jit
 from .lie import (
-    _hat_into,
-    se3_q_block_into,
+    se3_adjoint_into,
+    se3_exp_into,
+    se3_jacobian_into,
+    se3_jacobian_inv_into,
     so3_exp_into,
     so3_jacobian_into,
     so3_jacobian_inv_into,
@@ -163,55 +165,13 @@ def so3_normal_equations(s_all, w_all, R_meas, Rc, D, Mc, nseg, H, g, res):
 
 # --------------------------------------------------------------------------------- SE3
 @jit
-def _se3_exp_into(xi, R, t, Jscratch):
-    so3_exp_into(xi[3], xi[4], xi[5], R)
-    so3_jacobian_into(xi[3], xi[4], xi[5], 1.0, Jscratch)
+def _adj_inv_into(R, t, Ad, RT, tt):
+    """Ad_{T^-1} for T = (R, t): the adjoint of (R^T, -R^T t). RT (3, 3), tt (3,) scratch."""
     for r0 in range(3):
-        t[r0] = Jscratch[r0, 0] * xi[0] + Jscratch[r0, 1] * xi[1] + Jscratch[r0, 2] * xi[2]
-
-
-@jit
-def _se3_jac_into(xi, sign, inverse, J, scratch, Q, S3):
-    """6x6 SE3 Jacobian (sign=-1 right, +1 left), or its inverse."""
-    for r0 in range(3):
+        tt[r0] = -(R[0, r0] * t[0] + R[1, r0] * t[1] + R[2, r0] * t[2])
         for c0 in range(3):
-            J[3 + r0, c0] = 0.0
-    if inverse:
-        so3_jacobian_inv_into(xi[3], xi[4], xi[5], sign, S3)
-    else:
-        so3_jacobian_into(xi[3], xi[4], xi[5], sign, S3)
-    for r0 in range(3):
-        for c0 in range(3):
-            J[r0, c0] = S3[r0, c0]
-            J[3 + r0, 3 + c0] = S3[r0, c0]
-    se3_q_block_into(xi[:3], xi[3:], sign, Q, scratch)
-    if inverse:
-        for r0 in range(3):
-            for c0 in range(3):
-                s = 0.0
-                for m in range(3):
-                    for n in range(3):
-                        s += S3[r0, m] * Q[m, n] * S3[n, c0]
-                J[r0, 3 + c0] = -s
-    else:
-        for r0 in range(3):
-            for c0 in range(3):
-                J[r0, 3 + c0] = Q[r0, c0]
-
-
-@jit
-def _adj_inv_into(R, t, Ad, K):
-    """Ad_{T^-1} for T = (R, t): [[R^T, -R^T [t]x], [0, R^T]]."""
-    _hat_into(t[0], t[1], t[2], K)
-    for r0 in range(3):
-        for c0 in range(3):
-            Ad[r0, c0] = R[c0, r0]
-            Ad[3 + r0, 3 + c0] = R[c0, r0]
-            Ad[3 + r0, c0] = 0.0
-            s = 0.0
-            for m in range(3):
-                s += R[m, r0] * K[m, c0]
-            Ad[r0, 3 + c0] = -s
+            RT[r0, c0] = R[c0, r0]
+    se3_adjoint_into(RT, tt, Ad)
 
 
 @jit
@@ -236,10 +196,9 @@ def se3_normal_equations(s_all, w6, R_meas, p_meas, Rc, pc, D, Mc, nseg, H, g, r
     q = np.empty(4)
     r = np.empty(6)
     xi = np.empty(6)
-    scratch = np.empty((4, 3, 3))
-    Q = np.empty((3, 3))
-    S3 = np.empty((3, 3))
-    K = np.empty((3, 3))
+    scratch = np.empty((5, 3, 3))
+    RT = np.empty((3, 3))
+    tt = np.empty(3)
     Jl_inv_r = np.empty((6, 6))
     Jr_b = np.empty((6, 6))
     Jinv = np.empty((6, 6))
@@ -255,7 +214,7 @@ def se3_normal_equations(s_all, w6, R_meas, p_meas, Rc, pc, D, Mc, nseg, H, g, r
         for j in range(1, k):
             for z in range(6):
                 xi[z] = b[j] * D[seg + j, z]
-            _se3_exp_into(xi, AR[j], At[j], J3)
+            se3_exp_into(xi, AR[j], At[j], J3)
         # suffix products P_j = A_{j+1} .. A_{k-1} (as R, t)
         for r0 in range(3):
             Pt[k - 1, r0] = 0.0
@@ -282,9 +241,9 @@ def se3_normal_equations(s_all, w6, R_meas, p_meas, Rc, pc, D, Mc, nseg, H, g, r
         for z in range(6):
             res[m, z] = r[z]
             cost += w6[m, z] * r[z] * r[z]
-        _se3_jac_into(r, 1.0, True, Jl_inv_r, scratch, Q, S3)
+        se3_jacobian_inv_into(r, 1.0, Jl_inv_r, scratch)
         # G_0 = Ad_{P_0^-1}
-        _adj_inv_into(PR[0], Pt[0], G[0], K)
+        _adj_inv_into(PR[0], Pt[0], G[0], RT, tt)
         for i in range(1, k):
             for r0 in range(6):
                 for c0 in range(6):
@@ -292,15 +251,15 @@ def se3_normal_equations(s_all, w6, R_meas, p_meas, Rc, pc, D, Mc, nseg, H, g, r
         for j in range(1, k):
             for z in range(6):
                 xi[z] = b[j] * D[seg + j, z]
-            _se3_jac_into(xi, -1.0, False, Jr_b, scratch, Q, S3)
-            _adj_inv_into(PR[j], Pt[j], Ad, K)
+            se3_jacobian_into(xi, -1.0, Jr_b, scratch)
+            _adj_inv_into(PR[j], Pt[j], Ad, RT, tt)
             _mm(Ad, Jr_b, X)
             for r0 in range(6):
                 for c0 in range(6):
                     X[r0, c0] *= b[j]
-            _se3_jac_into(D[seg + j], -1.0, True, Jinv, scratch, Q, S3)
+            se3_jacobian_inv_into(D[seg + j], -1.0, Jinv, scratch)
             _add_product(X, Jinv, E, G[j], 1.0)
-            _se3_jac_into(D[seg + j], 1.0, True, Jinv, scratch, Q, S3)
+            se3_jacobian_inv_into(D[seg + j], 1.0, Jinv, scratch)
             _add_product(X, Jinv, E, G[j - 1], -1.0)
         Jm[:] = 0.0
         for i in range(k):
