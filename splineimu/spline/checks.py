@@ -39,17 +39,27 @@ MAX_STEP_ANGLE_RAD = np.pi / 2
 
 
 def check_rotation_steps(t, R):
-    """Refuse input whose consecutive poses rotate by more than :data:`MAX_STEP_ANGLE_RAD`."""
+    """Refuse input whose consecutive poses rotate by more than :data:`MAX_STEP_ANGLE_RAD`.
+
+    Across a gap (more than 3 median pose spacings) such a turn is not refused but returned as a
+    warning: the fit bridges the gap with the shortest turn, which may not be what happened.
+    """
     if R.shape[0] < 2:
-        return
+        return []
     c = np.einsum("nij,nij->n", R[:-1], R[1:])  # trace(R_a^T R_b) = 1 + 2 cos(angle)
     ang = np.arccos(np.clip((c - 1.0) / 2.0, -1.0, 1.0))
-    i = int(np.argmax(ang))
-    if ang[i] > MAX_STEP_ANGLE_RAD:
+    dt = np.diff(t)
+    gap = dt > 3.0 * np.median(dt)
+    big = ang > MAX_STEP_ANGLE_RAD
+    if np.any(big & ~gap):
+        i = int(np.argmax(np.where(gap, 0.0, ang)))
         raise InputError(
             f"poses {i} and {i + 1} (t = {t[i]:.6f} s and {t[i + 1]:.6f} s) rotate by {np.degrees(ang[i]):.1f} deg: "
             f"more than {np.degrees(MAX_STEP_ANGLE_RAD):.0f} deg between consecutive poses cannot be told from "
             "the opposite turn; record or export the poses at a higher rate")
+    return [FitWarning("gap_turn_ambiguous", f"the poses turn by {np.degrees(ang[i]):.0f} deg across the gap from "
+                       f"{t[i]:.3f} s to {t[i + 1]:.3f} s: the fit bridges it with the shortest turn",
+                       float(t[i]), float(t[i + 1])) for i in np.flatnonzero(big & gap)]
 
 
 def _running_median(x, width):

@@ -337,7 +337,7 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
     t, P, R, w = _validate(t_s, positions, quat_xyzw, weights)
     if t.size < 2:
         raise InputError(f"too few poses to fit: got {t.size}, need at least 2")
-    check_rotation_steps(t, R)
+    gap_warnings = check_rotation_steps(t, R)
     choice = None
     if "auto" in (r_order, r_dt, p_order, p_dt):
         choice = choose_knot_spacing(t, P, R, w, r_order, p_order, None if r_dt == "auto" else r_dt,
@@ -404,7 +404,7 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
     ea = np.linalg.norm(res_rot[keep], axis=1)
     pred_g = choice["predicted_gyro_rms_rad_s"] if choice else None
     pred_a = choice["predicted_accel_rms_m_s2"] if choice else None
-    warnings = prediction_warnings(choice, t) + warnings
+    warnings = prediction_warnings(choice, t) + gap_warnings + warnings
     report = FitReport(
         kind=kind, order=r_order, knot_spacing_s=lay_r[1], knot_spacing_source=source, n_poses=int(t.size),
         n_control=lay_r[3], span_s=(float(t[0]), float(t[-1])),

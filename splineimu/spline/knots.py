@@ -96,7 +96,12 @@ def max_rotation_spacing(t, R):
     h = float(np.median(np.diff(t))) if n > 1 else 1.0
 
     def turn(m):
-        return float(np.max(np.linalg.norm(lie.so3_log(np.matmul(np.swapaxes(R[:-m], 1, 2), R[m:])), axis=1)))
+        # windows that span a gap are left out (the fit bridges gaps with the smoothest turn)
+        ok = (t[m:] - t[:-m]) <= 1.5 * m * h + 2.0 * h
+        if not ok.any():
+            return 0.0
+        ang = np.linalg.norm(lie.so3_log(np.matmul(np.swapaxes(R[:-m][ok], 1, 2), R[m:][ok])), axis=1)
+        return float(np.max(ang))
 
     if n < 2 or turn(1) > MAX_CONTROL_TURN_RAD:
         return 0.7 * h
@@ -156,14 +161,20 @@ class _Window:
             per_ctrl = max(float(np.sum(Hf[:, 0])) / n, 1e-12)
             mu = np.where(row_weights(sparse, r + 1), SPARSE_SMOOTHNESS, DEFAULT_SMOOTHNESS) * per_ctrl
             add_position_penalty(Hf, mu, r)
-            C[f] = solve_banded_scalar(Hf, (rt - rhs[f]) if nfold > 1 else rt)
+            try:
+                C[f] = solve_banded_scalar(Hf, (rt - rhs[f]) if nfold > 1 else rt)
+            except np.linalg.LinAlgError:
+                # long stretches without data at a fine spacing: numerically singular, a
+                # spacing not to be chosen
+                C[f] = np.nan
         return C, s, M, nseg, dt_
 
     def score(self, k, dt, fold):
         C, s, M, nseg, _ = self.fit_folds(k, dt, fold, N_FOLDS)
         e = np.empty(self.t.size)
         _kf.fold_prediction_errors(s, fold, self.X, C, M, nseg, e)
-        return float(np.sum(e[self.scored])), int(np.count_nonzero(self.scored))
+        total = float(np.sum(e[self.scored]))
+        return (total if np.isfinite(total) else np.inf), int(np.count_nonzero(self.scored))
 
     def derivative(self, k, dt, fold, nfold, r, X=None):
         """r-th derivative of the fits without each fold (nfold, N, d) at every sample."""
@@ -312,8 +323,8 @@ def _ladder_errors(windows, k, ladder, noises, r):
                 change += float(np.sum(D[:, :3] ** 2) - np.sum(D[:, 3:] ** 2))
             prev[i] = d[wd.scored]
             e_list.append((wd.t, e2))
-        var[j] /= max(nsc, 1)
-        bias2[j] = max(change / max(nsc, 1), 0.0)
+        var[j] = var[j] / max(nsc, 1) if np.isfinite(var[j]) else np.inf
+        bias2[j] = max(change / max(nsc, 1), 0.0) if np.isfinite(change) else np.inf
         ends.append(e_list)
     return var[1:], bias2[1:], ends[1:]
 
