@@ -138,6 +138,8 @@ def find_cycles(graph: dict[str, set[str]]) -> list[list[str]]:
 
 
 def layer_of(name: str) -> str:
+    if any(part.startswith("_kernels") for part in name.split(".")):
+        return "kernels"  # splineimu/_kernels/ and a package's private kernels (camera/_kernels.py)
     rel = name.split(".", 1)[1] if "." in name else ""
     for prefix, layer in LAYER_RULES:
         if rel == prefix or rel.startswith(prefix + ".") or prefix == "":
@@ -155,6 +157,7 @@ def test_cycle_finder_and_layers_on_small_cases():
     assert find_cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
     assert find_cycles({"a": {"b"}, "b": set()}) == []
     assert layer_of("splineimu._kernels.lie") == "kernels"
+    assert layer_of("splineimu.camera._kernels") == "kernels"
     assert layer_of("splineimu.io.tum") == "io"
     assert layer_of("splineimu.commands.run") == "cli"
     assert layer_of("splineimu.spline.fit") == "math"
