@@ -60,8 +60,9 @@ def spline_tradeoffs():
 def roundtrip_tradeoffs():
     """60 s noise-free ellipse at 200 Hz: sampling mode x integration method."""
     from splineimu.integrate import NavState, integrate
-    from splineimu.pipeline import synthesize, uniform_stamps_ns
+    from splineimu.pipeline import synthesize
     from splineimu.scenes import make_scene
+    from splineimu.timegrid import uniform_stamps_ns
 
     sc = make_scene("ellipse", duration_s=60.0)
     t_ns = uniform_stamps_ns(0, 60_000_000_000, 200)

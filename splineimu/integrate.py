@@ -47,28 +47,22 @@ E. Hairer, C. Lubich, G. Wanner, "Geometric Numerical Integration", 2nd ed., ch.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
 from ._kernels import integrate as _k
-from .errors import ConfigError, InputError, SplineImuError
+from .errors import ConfigError, InputError
 from .lie import matrix_to_quat_xyzw, quat_make_continuous, quat_normalize, quat_xyzw_to_matrix
 from .motion import DEFAULT_GRAVITY
+from .validation import as_quat_xyzw, as_times_s, as_vector, as_vectors, finite_float, one_of
 
-__all__ = ["NavState", "Trajectory", "integrate", "METHODS", "METHOD_ORDER"]
+__all__ = ["NavState", "Trajectory", "DeadReckoning", "integrate", "dead_reckon", "default_groundtruth_path",
+           "METHODS", "METHOD_ORDER"]
 
 #: Integration methods and their order of accuracy in the sample interval.
 METHOD_ORDER = {"euler": 1, "midpoint": 2, "rk4": 4}
 METHODS = tuple(METHOD_ORDER)
-
-
-def _vec(x, n, name):
-    a = np.asarray(x, dtype=np.float64)
-    if a.shape != (n,):
-        raise ConfigError(f"Expected `{name}` to have shape ({n},), got {a.shape}")
-    if not np.all(np.isfinite(a)):
-        raise ConfigError(f"`{name}` contains NaN or inf")
-    return np.ascontiguousarray(a)
 
 
 @dataclass
@@ -106,18 +100,13 @@ class NavState:
 
     def __post_init__(self):
         if self.t_s is not None:
-            self.t_s = float(self.t_s)
-            if not np.isfinite(self.t_s):
-                raise ConfigError("`t_s` of the initial state is NaN or inf")
-        self.position_world = _vec(self.position_world, 3, "position_world")
-        q = _vec(self.quat_xyzw, 4, "quat_xyzw")
-        try:
-            self.quat_xyzw = quat_normalize(q)
-        except SplineImuError as exc:  # zero or non-finite quaternion
-            raise ConfigError(str(exc)) from None
-        self.velocity_world = _vec(self.velocity_world, 3, "velocity_world")
-        self.bias_gyro = _vec(self.bias_gyro, 3, "bias_gyro")
-        self.bias_accel = _vec(self.bias_accel, 3, "bias_accel")
+            self.t_s = finite_float(self.t_s, "t_s")
+        self.position_world = as_vector(self.position_world, "position_world")
+        q = as_quat_xyzw(np.reshape(as_vector(self.quat_xyzw, "quat_xyzw", 4), (1, 4)), "quat_xyzw")
+        self.quat_xyzw = quat_normalize(q[0])
+        self.velocity_world = as_vector(self.velocity_world, "velocity_world")
+        self.bias_gyro = as_vector(self.bias_gyro, "bias_gyro")
+        self.bias_accel = as_vector(self.bias_accel, "bias_accel")
 
     @property
     def world_R_body(self) -> np.ndarray:
@@ -188,16 +177,6 @@ class Trajectory:
         return pd.DataFrame(cols)
 
 
-def _samples(x, n, name):
-    a = np.asarray(x, dtype=np.float64)
-    if a.shape != (n, 3):
-        raise InputError(f"Expected `{name}` to have shape ({n}, 3), got {a.shape}")
-    if not np.all(np.isfinite(a)):
-        i = int(np.flatnonzero(~np.all(np.isfinite(a), axis=1))[0])
-        raise InputError(f"`{name}` row {i} contains NaN or inf")
-    return np.ascontiguousarray(a)
-
-
 def integrate(t_s, gyro, accel, init: NavState, method: str = "rk4",
               gravity=DEFAULT_GRAVITY) -> Trajectory:
     """Dead-reckon body rate and specific force from an initial state.
@@ -226,9 +205,10 @@ def integrate(t_s, gyro, accel, init: NavState, method: str = "rk4",
     Raises
     ------
     InputError
-        Wrong shapes, NaN/inf, fewer than 2 samples or times not strictly increasing.
+        Wrong shapes, NaN/inf (also in ``gravity``), fewer than 2 samples or times not strictly
+        increasing.
     ConfigError
-        Unknown method, bad gravity, or ``init.t_s`` not at the first sample.
+        Unknown method, or ``init.t_s`` not at the first sample.
 
     Notes
     -----
@@ -248,27 +228,16 @@ def integrate(t_s, gyro, accel, init: NavState, method: str = "rk4",
     >>> bool(np.abs(tr.position_world).max() < 1e-15)
     True
     """
-    if method not in METHOD_ORDER:
-        raise ConfigError(f"Unknown integration method {method!r}; expected one of {', '.join(METHODS)}")
+    one_of(method, "method", METHODS)
     if not isinstance(init, NavState):
         raise ConfigError(f"Expected `init` to be a NavState, got {type(init).__name__}")
-    t = np.asarray(t_s, dtype=np.float64)
-    if t.ndim != 1:
-        raise InputError(f"Expected `t_s` to have shape (N,), got {t.shape}")
+    t = as_times_s(t_s, "t_s", increasing=True)
     n = t.shape[0]
     if n < 2:
         raise InputError(f"Need at least 2 samples to integrate, got {n}")
-    if not np.all(np.isfinite(t)):
-        raise InputError("`t_s` contains NaN or inf")
-    bad = np.flatnonzero(np.diff(t) <= 0.0)
-    if bad.size:
-        i = int(bad[0])
-        raise InputError(f"`t_s` must be strictly increasing: t_s[{i + 1}] = {t[i + 1]!r} "
-                         f"<= t_s[{i}] = {t[i]!r}")
-    t = np.ascontiguousarray(t)
-    w = _samples(gyro, n, "gyro")
-    f = _samples(accel, n, "accel")
-    g = _vec(gravity, 3, "gravity")
+    w = as_vectors(gyro, "gyro", n)
+    f = as_vectors(accel, "accel", n)
+    g = as_vector(gravity, "gravity")
     if init.t_s is not None and abs(init.t_s - t[0]) > 1e-9 * max(1.0, abs(t[0])):
         raise ConfigError(f"The initial state is at t = {init.t_s!r} s but the first sample is at "
                           f"t = {t[0]!r} s; they must coincide")
@@ -290,3 +259,134 @@ def integrate(t_s, gyro, accel, init: NavState, method: str = "rk4",
         _k.rk4_kernel(t, w, f, w_mid, f_mid, *args)
     quat = quat_make_continuous(np.ascontiguousarray(q[:, [1, 2, 3, 0]]))
     return Trajectory(t_s=t.copy(), position_world=p, quat_xyzw=quat, velocity_world=v, method=method)
+
+
+# ----------------------------------------------------------------------------- recorded files
+
+
+@dataclass
+class DeadReckoning:
+    """A recording dead-reckoned from its ground-truth initial state (:func:`dead_reckon`).
+
+    Attributes
+    ----------
+    trajectory : Trajectory
+        From the first IMU sample inside the ground truth's span; ``t_s`` relative to it.
+    t_ns : (N,) int64
+        The IMU stamps of the trajectory's rows [ns].
+    imu_path, groundtruth_path : pathlib.Path
+    skipped_samples : int
+        IMU samples before the ground truth starts (not integrated).
+    final_position_error_m : float or None
+        Distance to the ground truth at the last stamp; None when that lies outside it.
+    integrate_time_s : float
+        Wall time of the integration alone [s] (for the command's report; not a result).
+    """
+
+    trajectory: Trajectory
+    t_ns: np.ndarray
+    imu_path: Path
+    groundtruth_path: Path
+    skipped_samples: int = 0
+    final_position_error_m: float | None = None
+    integrate_time_s: float = 0.0
+
+    @property
+    def method(self) -> str:
+        return self.trajectory.method
+
+    def to_dataframe(self):
+        """:meth:`Trajectory.to_dataframe` with the stamps ``t_ns`` in front."""
+        df = self.trajectory.to_dataframe()
+        df.insert(0, "t_ns", self.t_ns)
+        return df
+
+    def write_tum(self, path) -> Path:
+        """Write the trajectory as a TUM file (stamps exact from ``t_ns``), atomically.
+
+        Raises
+        ------
+        ConfigError
+            The output folder does not exist.
+        """
+        from .io.tum import write_tum
+
+        out = Path(path)
+        if not out.resolve().parent.is_dir():
+            raise ConfigError(f"output folder does not exist: {out.resolve().parent}")
+        return write_tum(out, self.t_ns, self.trajectory.position_world, self.trajectory.quat_xyzw)
+
+
+def default_groundtruth_path(imu_csv) -> Path:
+    """``OUT/state_groundtruth_estimate0/data.csv`` for ``OUT/imu0/data.csv``."""
+    return Path(imu_csv).resolve().parent.parent / "state_groundtruth_estimate0" / "data.csv"
+
+
+def dead_reckon(imu_path, init=None, method: str = "rk4", gravity=DEFAULT_GRAVITY) -> DeadReckoning:
+    """Dead-reckon an EuRoC IMU csv from the ground-truth state at its first covered sample.
+
+    Parameters
+    ----------
+    imu_path : path-like
+        EuRoC ``imu0/data.csv`` (gyro [rad/s], specific force [m/s^2]).
+    init : path-like, optional
+        EuRoC 17-column ground truth for the initial pose, velocity and (constant) biases;
+        default :func:`default_groundtruth_path`. The state is interpolated
+        (:class:`splineimu.groundtruth.GroundTruth`) to the first IMU stamp inside its span;
+        earlier samples are skipped.
+    method : {"euler", "midpoint", "rk4"}
+    gravity : (3,) array_like
+        ``g_w`` [m/s^2].
+
+    Returns
+    -------
+    DeadReckoning
+
+    Raises
+    ------
+    ConfigError
+        Missing ground-truth file, or no IMU samples inside its span.
+    InputError
+        Unreadable files.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> d = pathlib.Path(tempfile.mkdtemp())
+    >>> _ = (d / "imu.csv").write_text("".join(f"{i * 5000000},0,0,0,0,0,9.81\\n" for i in range(5)))
+    >>> _ = (d / "gt.csv").write_text("0,1,2,3,1" + ",0" * 12 + "\\n40000000,1,2,3,1" + ",0" * 12 + "\\n")
+    >>> r = dead_reckon(d / "imu.csv", init=d / "gt.csv", method="euler")
+    >>> r.t_ns.tolist(), r.trajectory.position_world[-1].tolist(), r.final_position_error_m
+    ([0, 5000000, 10000000, 15000000, 20000000], [1.0, 2.0, 3.0], 0.0)
+    """
+    import time
+
+    from .groundtruth import read_groundtruth
+    from .io.imu_csv import read_imu_csv
+
+    imu_path = Path(imu_path)
+    gt_path = Path(init) if init is not None else default_groundtruth_path(imu_path)
+    if not gt_path.is_file():
+        hint = "" if init is not None else " (the default beside the IMU file); pass --init GROUND_TRUTH"
+        raise ConfigError(f"initial-state file not found: {gt_path}{hint}")
+    one_of(method, "method", METHODS)
+    t_ns, gyro, accel = read_imu_csv(imu_path)
+    gt = read_groundtruth(gt_path)
+    i0 = int(np.searchsorted(t_ns, gt.t_ns[0], side="left"))
+    if i0 >= t_ns.shape[0] or t_ns[i0] > gt.t_ns[-1]:
+        raise ConfigError(f"no IMU sample lies inside the ground truth's time span "
+                          f"[{gt.t_ns[0]}, {gt.t_ns[-1]}] ns of {gt_path}")
+    s = gt.state_at(t_ns[i0])
+    init_state = NavState(0.0, s.position_world, s.quat_xyzw, s.velocity_world, s.bias_gyro, s.bias_accel)
+    t_ns = t_ns[i0:]
+    if t_ns.shape[0] < 2:
+        raise ConfigError(f"fewer than 2 IMU samples inside the ground truth's time span ({gt_path})")
+    t_s = (t_ns - t_ns[0]).astype(np.float64) / 1e9
+    tic = time.perf_counter()
+    traj = integrate(t_s, gyro[i0:], accel[i0:], init_state, method=method, gravity=gravity)
+    elapsed = time.perf_counter() - tic
+    err = None
+    if gt.covers(t_ns[-1]):
+        err = float(np.linalg.norm(traj.position_world[-1] - gt.state_at(t_ns[-1]).position_world))
+    return DeadReckoning(traj, t_ns, imu_path, gt_path, skipped_samples=i0, final_position_error_m=err,
+                         integrate_time_s=elapsed)

@@ -27,7 +27,8 @@ from __future__ import annotations
 import numpy as np
 
 from ._kernels import lie as _k
-from .errors import SplineImuError
+from .errors import InputError
+from .validation import as_float_array
 
 __all__ = [
     "so3_hat", "so3_vee", "so3_exp", "so3_log", "so3_compose", "so3_inverse", "so3_act",
@@ -41,12 +42,12 @@ __all__ = [
 
 
 def _as_batch(x, tail: tuple, name: str):
-    """Return ``(x as (N, *tail) contiguous float64, leading shape)``."""
-    a = np.asarray(x, dtype=np.float64)
+    """Return ``(x as (N, *tail) contiguous float64, leading shape)``; NaN passes through."""
+    a = as_float_array(x, name, finite=False)
     nt = len(tail)
     if a.ndim < nt or a.shape[a.ndim - nt:] != tail:
         want = "(..., " + ", ".join(map(str, tail)) + ")"
-        raise SplineImuError(f"Expected `{name}` to have shape {want}, got {a.shape}")
+        raise InputError(f"Expected `{name}` to have shape {want}, got {a.shape}")
     lead = a.shape[: a.ndim - nt]
     return np.ascontiguousarray(a.reshape((-1,) + tail)), lead
 
@@ -55,20 +56,20 @@ def _unbatch(out, lead, tail):
     return out.reshape(lead + tail)
 
 
+def _map(kernel, x, tail_in, name, tail_out, *args):
+    """``kernel(x as (N, *tail_in), *args, out (N, *tail_out))`` with ``x``'s leading shape."""
+    a, lead = _as_batch(x, tail_in, name)
+    out = np.empty((a.shape[0],) + tail_out)
+    kernel(a, *args, out)
+    return _unbatch(out, lead, tail_out)
+
+
 # --------------------------------------------------------------------------------- SO3
 
 
 def so3_hat(phi):
-    """Skew-symmetric matrix ``[phi]x`` of ``phi`` (..., 3) -> (..., 3, 3)."""
-    p, lead = _as_batch(phi, (3,), "phi")
-    K = np.zeros((p.shape[0], 3, 3))
-    K[:, 0, 1] = -p[:, 2]
-    K[:, 0, 2] = p[:, 1]
-    K[:, 1, 0] = p[:, 2]
-    K[:, 1, 2] = -p[:, 0]
-    K[:, 2, 0] = -p[:, 1]
-    K[:, 2, 1] = p[:, 0]
-    return _unbatch(K, lead, (3, 3))
+    """Skew-symmetric matrix ``[phi]x`` of ``phi`` (..., 3) -> (..., 3, 3), ``[phi]x v = phi x v``."""
+    return _map(_k.so3_hat_batch, phi, (3,), "phi", (3, 3))
 
 
 def so3_vee(K):
@@ -81,6 +82,17 @@ def so3_vee(K):
 def so3_exp(phi):
     """Exponential map ``Exp(phi) = exp([phi]x)`` (Rodrigues), (..., 3) -> (..., 3, 3).
 
+    Parameters
+    ----------
+    phi : array_like, (..., 3)
+        Rotation vectors [rad], any norm.
+
+    Returns
+    -------
+    ndarray, (..., 3, 3)
+        ``I + sin(t)/t K + (1 - cos t)/t^2 K^2`` with ``K = [phi]x``, ``t = |phi|``; below
+        ``EXP_SMALL_ANGLE`` the coefficients come from their Taylor series.
+
     Examples
     --------
     >>> import numpy as np
@@ -88,10 +100,7 @@ def so3_exp(phi):
     array([[ 0., -1.,  0.],
            [ 1.,  0.,  0.]])
     """
-    p, lead = _as_batch(phi, (3,), "phi")
-    out = np.empty((p.shape[0], 3, 3))
-    _k.so3_exp_batch(p, out)
-    return _unbatch(out, lead, (3, 3))
+    return _map(_k.so3_exp_batch, phi, (3,), "phi", (3, 3))
 
 
 def so3_log(rot):
@@ -106,23 +115,34 @@ def so3_log(rot):
     -------
     phi : ndarray, (..., 3)
 
+    Raises
+    ------
+    InputError
+        A wrong shape, or a zero or non-finite quaternion.
+
     Notes
     -----
     Computed as ``2 atan2(|v|, |w|) v / |v| sign(w)`` on the (Shepperd) quaternion, which is
     accurate at both ends of [0, pi]. At exactly pi the sign of the axis is arbitrary.
+
+    Examples
+    --------
+    A half turn about z, from its matrix and from either sign of its quaternion:
+
+    >>> import numpy as np
+    >>> R = np.diag([-1.0, -1.0, 1.0])
+    >>> bool(np.allclose(so3_log(R), [0.0, 0.0, np.pi], rtol=0, atol=1e-15))
+    True
+    >>> so3_log([0.0, 0.0, 1.0, 0.0]), so3_log([0.0, 0.0, -1.0, 0.0])
+    (array([0.        , 0.        , 3.14159265]), array([ 0.        ,  0.        , -3.14159265]))
     """
-    a = np.asarray(rot, dtype=np.float64)
+    a = as_float_array(rot, "rot", finite=False)
     if a.ndim >= 1 and a.shape[-1] == 4:
         q, lead = _as_batch(a, (4,), "rot")
         wxyz = np.ascontiguousarray(q[:, [3, 0, 1, 2]])
         _check_quat_norm(wxyz, "rot")
-        out = np.empty((q.shape[0], 3))
-        _k.quat_wxyz_log_batch(wxyz, out)
-        return _unbatch(out, lead, (3,))
-    R, lead = _as_batch(a, (3, 3), "rot")
-    out = np.empty((R.shape[0], 3))
-    _k.so3_log_batch(R, out)
-    return _unbatch(out, lead, (3,))
+        return _map(_k.quat_wxyz_log_batch, wxyz, (4,), "rot", (3,)).reshape(lead + (3,))
+    return _map(_k.so3_log_batch, a, (3, 3), "rot", (3,))
 
 
 def so3_compose(R_ab, R_bc):
@@ -145,34 +165,65 @@ def so3_adjoint(R):
     return np.array(R, dtype=np.float64)
 
 
-def _so3_jac(phi, sign, inverse):
-    p, lead = _as_batch(phi, (3,), "phi")
-    out = np.empty((p.shape[0], 3, 3))
-    if inverse:
-        _k.so3_jacobian_inv_batch(p, float(sign), out)
-    else:
-        _k.so3_jacobian_batch(p, float(sign), out)
-    return _unbatch(out, lead, (3, 3))
+#: batch kernel of each Jacobian: (group, inverse) -> kernel(x, sign, out)
+_JACOBIAN_KERNELS = {
+    ("so3", False): _k.so3_jacobian_batch,
+    ("so3", True): _k.so3_jacobian_inv_batch,
+    ("se3", False): _k.se3_jacobian_batch,
+    ("se3", True): _k.se3_jacobian_inv_batch,
+}
+#: the kernels' ``sign`` argument: +1 for the left Jacobian, -1 for the right one
+_SIDE_SIGN = {"left": 1.0, "right": -1.0}
+
+
+def _jacobian(x, group: str, side: str, inverse: bool):
+    dim, name = (3, "phi") if group == "so3" else (6, "xi")
+    return _map(_JACOBIAN_KERNELS[group, inverse], x, (dim,), name, (dim, dim), _SIDE_SIGN[side])
 
 
 def so3_right_jacobian(phi):
-    """Right Jacobian ``J_r(phi) = I - (1-cos t)/t^2 K + (t - sin t)/t^3 K^2``, (..., 3) -> (..., 3, 3)."""
-    return _so3_jac(phi, -1, False)
+    """Right Jacobian of SO3: ``Exp(phi + dphi) ~= Exp(phi) Exp(J_r(phi) dphi)``.
+
+    Parameters
+    ----------
+    phi : array_like, (..., 3)
+
+    Returns
+    -------
+    ndarray, (..., 3, 3)
+        ``J_r = I - (1 - cos t)/t^2 K + (t - sin t)/t^3 K^2``, ``K = [phi]x``, ``t = |phi|``
+        (Taylor series below ``JAC_SMALL_ANGLE``).
+
+    Examples
+    --------
+    A small increment on the right of ``Exp(phi)`` moves ``phi`` by ``J_r^-1`` of it:
+
+    >>> import numpy as np
+    >>> phi, d = np.array([0.3, -1.2, 0.5]), 1e-7 * np.array([1.0, 2.0, -1.0])
+    >>> moved = so3_log(so3_exp(phi) @ so3_exp(d))
+    >>> bool(np.allclose(moved - phi, so3_right_jacobian_inv(phi) @ d, rtol=1e-6, atol=0))
+    True
+    """
+    return _jacobian(phi, "so3", "right", False)
 
 
 def so3_left_jacobian(phi):
-    """Left Jacobian ``J_l(phi) = J_r(-phi) = I + (1-cos t)/t^2 K + (t - sin t)/t^3 K^2``."""
-    return _so3_jac(phi, +1, False)
+    """Left Jacobian of SO3, ``J_l(phi) = J_r(-phi) = Exp(phi) J_r(phi)``, (..., 3) -> (..., 3, 3):
+    ``I + (1 - cos t)/t^2 K + (t - sin t)/t^3 K^2``. It also maps ``rho`` to the translation of
+    ``se3_exp([rho, phi])``."""
+    return _jacobian(phi, "so3", "left", False)
 
 
 def so3_right_jacobian_inv(phi):
-    """Inverse right Jacobian ``I + K/2 + (1/t^2 - cot(t/2)/(2t)) K^2`` (finite up to |phi| < 2 pi)."""
-    return _so3_jac(phi, -1, True)
+    """Inverse right Jacobian ``I + K/2 + (1/t^2 - cot(t/2)/(2t)) K^2``, (..., 3) -> (..., 3, 3);
+    finite for ``|phi| < 2 pi``."""
+    return _jacobian(phi, "so3", "right", True)
 
 
 def so3_left_jacobian_inv(phi):
-    """Inverse left Jacobian ``I - K/2 + (1/t^2 - cot(t/2)/(2t)) K^2``."""
-    return _so3_jac(phi, +1, True)
+    """Inverse left Jacobian ``I - K/2 + (1/t^2 - cot(t/2)/(2t)) K^2``, the transpose of
+    :func:`so3_right_jacobian_inv`; it maps a translation to ``rho`` in :func:`se3_log`."""
+    return _jacobian(phi, "so3", "left", True)
 
 
 # --------------------------------------------------------------------------------- SE3
@@ -195,19 +246,33 @@ def se3_vee(X):
 
 
 def se3_exp(xi):
-    """Exponential map of ``xi = [rho, phi]`` (..., 6) -> (..., 4, 4): ``(Exp(phi), J_l(phi) rho)``."""
-    x, lead = _as_batch(xi, (6,), "xi")
-    out = np.empty((x.shape[0], 4, 4))
-    _k.se3_exp_batch(x, out)
-    return _unbatch(out, lead, (4, 4))
+    """Exponential map of ``xi = [rho, phi]`` (..., 6) -> (..., 4, 4): ``(Exp(phi), J_l(phi) rho)``.
+
+    Examples
+    --------
+    A screw motion: a quarter turn about z while moving 1 m along it.
+
+    >>> import numpy as np
+    >>> np.round(se3_exp([0.0, 0.0, 1.0, 0.0, 0.0, np.pi / 2]), 12)
+    array([[ 0., -1.,  0.,  0.],
+           [ 1.,  0.,  0.,  0.],
+           [ 0.,  0.,  1.,  1.],
+           [ 0.,  0.,  0.,  1.]])
+    """
+    return _map(_k.se3_exp_batch, xi, (6,), "xi", (4, 4))
 
 
 def se3_log(T):
-    """Logarithm map (..., 4, 4) -> (..., 6) ``[rho, phi]``, ``|phi| <= pi``."""
-    M, lead = _as_batch(T, (4, 4), "T")
-    out = np.empty((M.shape[0], 6))
-    _k.se3_log_batch(M, out)
-    return _unbatch(out, lead, (6,))
+    """Logarithm map (..., 4, 4) -> (..., 6) ``[rho, phi]``, ``|phi| <= pi``, ``rho = J_l(phi)^-1 t``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> xi = np.array([0.5, -1.0, 2.0, 0.1, 0.2, -0.3])
+    >>> bool(np.allclose(se3_log(se3_exp(xi)), xi, rtol=0, atol=1e-15))
+    True
+    """
+    return _map(_k.se3_log_batch, T, (4, 4), "T", (6,))
 
 
 def se3_compose(T_ab, T_bc):
@@ -235,43 +300,39 @@ def se3_act(T, p):
 def se3_adjoint(T):
     """Adjoint (..., 6, 6) for ``[rho, phi]``: ``[[R, [t]x R], [0, R]]``, so that
     ``T Exp(xi) T^-1 = Exp(Ad_T xi)``."""
-    M, lead = _as_batch(T, (4, 4), "T")
-    R = M[:, :3, :3]
-    out = np.zeros((M.shape[0], 6, 6))
-    out[:, :3, :3] = R
-    out[:, 3:, 3:] = R
-    out[:, :3, 3:] = np.matmul(so3_hat(M[:, :3, 3]), R)
-    return _unbatch(out, lead, (6, 6))
-
-
-def _se3_jac(xi, sign, inverse):
-    x, lead = _as_batch(xi, (6,), "xi")
-    out = np.empty((x.shape[0], 6, 6))
-    if inverse:
-        _k.se3_jacobian_inv_batch(x, float(sign), out)
-    else:
-        _k.se3_jacobian_batch(x, float(sign), out)
-    return _unbatch(out, lead, (6, 6))
+    return _map(_k.se3_adjoint_batch, T, (4, 4), "T", (6, 6))
 
 
 def se3_left_jacobian(xi):
-    """Left Jacobian of SE3, (..., 6) -> (..., 6, 6): ``[[J_l(phi), Q(rho, phi)], [0, J_l(phi)]]``."""
-    return _se3_jac(xi, +1, False)
+    """Left Jacobian of SE3, (..., 6) -> (..., 6, 6): ``[[J_l(phi), Q(rho, phi)], [0, J_l(phi)]]``
+    with Barfoot's ``Q`` block (Taylor series below ``SE3_Q_SMALL_ANGLE``)."""
+    return _jacobian(xi, "se3", "left", False)
 
 
 def se3_right_jacobian(xi):
-    """Right Jacobian of SE3, ``J_r(xi) = J_l(-xi)``."""
-    return _se3_jac(xi, -1, False)
+    """Right Jacobian of SE3, ``J_r(xi) = J_l(-xi)``: ``Exp(xi + dxi) ~= Exp(xi) Exp(J_r(xi) dxi)``.
+
+    Parameters
+    ----------
+    xi : array_like, (..., 6)
+        ``[rho, phi]``.
+
+    Returns
+    -------
+    ndarray, (..., 6, 6)
+        ``[[J_r(phi), Q(-rho, -phi)], [0, J_r(phi)]]``.
+    """
+    return _jacobian(xi, "se3", "right", False)
 
 
 def se3_left_jacobian_inv(xi):
-    """Inverse of :func:`se3_left_jacobian`."""
-    return _se3_jac(xi, +1, True)
+    """Inverse of :func:`se3_left_jacobian`: ``[[Ji, -Ji Q Ji], [0, Ji]]`` with ``Ji = J_l(phi)^-1``."""
+    return _jacobian(xi, "se3", "left", True)
 
 
 def se3_right_jacobian_inv(xi):
-    """Inverse of :func:`se3_right_jacobian`."""
-    return _se3_jac(xi, -1, True)
+    """Inverse of :func:`se3_right_jacobian`; finite for ``|phi| < 2 pi``."""
+    return _jacobian(xi, "se3", "right", True)
 
 
 # --------------------------------------------------------------------------- quaternions
@@ -282,7 +343,7 @@ def _check_quat_norm(q, name):
     bad = ~np.isfinite(n) | (n < 1e-12)
     if np.any(bad):
         i = int(np.flatnonzero(bad)[0])
-        raise SplineImuError(f"`{name}` row {i} is not a valid quaternion (norm {n[i]:g})")
+        raise InputError(f"`{name}` row {i} is not a valid quaternion (norm {n[i]:g})")
 
 
 def quat_normalize(quat_xyzw):
@@ -296,17 +357,14 @@ def quat_xyzw_to_matrix(quat_xyzw):
     """Rotation matrices of quaternions (normalized first), (..., 4) -> (..., 3, 3)."""
     q, lead = _as_batch(quat_xyzw, (4,), "quat_xyzw")
     _check_quat_norm(q, "quat_xyzw")
-    out = np.empty((q.shape[0], 3, 3))
-    _k.quat_wxyz_to_mat_batch(np.ascontiguousarray(q[:, [3, 0, 1, 2]]), out)
+    out = _map(_k.quat_wxyz_to_mat_batch, q[:, [3, 0, 1, 2]], (4,), "quat_xyzw", (3, 3))
     return _unbatch(out, lead, (3, 3))
 
 
 def matrix_to_quat_xyzw(R):
     """Unit quaternions with ``w >= 0`` of rotation matrices, (..., 3, 3) -> (..., 4)."""
-    M, lead = _as_batch(R, (3, 3), "R")
-    wxyz = np.empty((M.shape[0], 4))
-    _k.mat_to_quat_wxyz_batch(M, wxyz)
-    return _unbatch(np.ascontiguousarray(wxyz[:, [1, 2, 3, 0]]), lead, (4,))
+    wxyz = _map(_k.mat_to_quat_wxyz_batch, R, (3, 3), "R", (4,))
+    return np.ascontiguousarray(wxyz[..., [1, 2, 3, 0]])
 
 
 def quat_make_continuous(quat_xyzw):
@@ -324,10 +382,17 @@ def quat_make_continuous(quat_xyzw):
     Returns
     -------
     ndarray, same shape as ``quat_xyzw``; each row is ``+q`` or ``-q`` (not renormalized).
+
+    Examples
+    --------
+    >>> quat_make_continuous([[0.5, 0.5, 0.5, 0.5], [-0.5, -0.5, -0.1, -0.7], [0.1, 0.7, 0.5, 0.5]])
+    array([[0.5, 0.5, 0.5, 0.5],
+           [0.5, 0.5, 0.1, 0.7],
+           [0.1, 0.7, 0.5, 0.5]])
     """
     q = np.array(quat_xyzw, dtype=np.float64)
     if q.ndim == 0 or q.shape[-1] != 4:
-        raise SplineImuError(f"Expected `quat_xyzw` to have shape (N, 4), got {q.shape}")
+        raise InputError(f"Expected `quat_xyzw` to have shape (N, 4), got {q.shape}")
     if q.ndim == 1 or q.shape[-2] == 0:
         return q
     d = np.einsum("...ij,...ij->...i", q[..., 1:, :], q[..., :-1, :])

@@ -37,8 +37,9 @@ from pathlib import Path
 import numpy as np
 
 from .errors import ConfigError, InputError, SplineImuError
+from .validation import as_quat_xyzw, as_times_s, as_vectors, nonnegative_float, one_of, positive_float
 
-__all__ = ["MetricResult", "CompareResult", "compare", "plot_compare", "load_tum", "EVO_MISSING",
+__all__ = ["MetricResult", "CompareResult", "compare", "compare_files", "plot_compare", "load_tum", "EVO_MISSING",
            "POSE_RELATIONS", "ALIGN_MODES", "DELTA_UNITS"]
 
 EVO_MISSING = "splineimu compare needs evo: pip install 'splineimu[evo]'"
@@ -107,6 +108,12 @@ class MetricResult:
         lines += [f"{name:>10}\t{self.stats[name]:.6f}" for name in sorted(self.stats)]
         return "\n".join(lines) + "\n"
 
+    def to_dataframe(self):
+        """``pandas.DataFrame`` of the errors over time: columns ``t_s`` and ``error`` (in :attr:`unit`)."""
+        import pandas as pd
+
+        return pd.DataFrame({"t_s": self.timestamps_s, "error": self.errors})
+
 
 @dataclass
 class CompareResult:
@@ -128,6 +135,8 @@ class CompareResult:
         Associated reference positions [m].
     est_positions_aligned : (n, 3) float64
         Associated estimate positions after alignment [m].
+    plot_path : pathlib.Path or None
+        The plot :func:`compare_files` saved, if any.
     """
 
     ape: MetricResult | None
@@ -138,13 +147,24 @@ class CompareResult:
     timestamps_s: np.ndarray = field(repr=False)
     ref_positions: np.ndarray = field(repr=False)
     est_positions_aligned: np.ndarray = field(repr=False)
+    plot_path: Path | None = None
 
     @property
     def results(self) -> list:
+        """The metrics computed (APE first)."""
         return [r for r in (self.ape, self.rpe) if r is not None]
 
     def pretty_str(self) -> str:
+        """Every metric as evo prints it."""
         return "\n".join(r.pretty_str() for r in self.results)
+
+    def to_dataframe(self):
+        """``pandas.DataFrame`` with one row per metric: metric, pose relation, unit and evo's statistics."""
+        import pandas as pd
+
+        return pd.DataFrame([{"metric": r.metric, "pose_relation": r.pose_relation, "unit": r.unit,
+                              "delta_frames": r.delta_frames, **{k: r.stats[k] for k in STAT_NAMES}}
+                             for r in self.results])
 
 
 def load_tum(path):
@@ -181,13 +201,12 @@ def _as_evo(traj, name):
     else:
         raise ConfigError(f"`{name}` must be a TUM path, a trajectory object or a tuple "
                           f"(t_s, positions, quat_xyzw); got {type(traj).__name__}")
-    t = np.asarray(t, dtype=np.float64)
-    p = np.asarray(p, dtype=np.float64)
-    q = np.asarray(q, dtype=np.float64)
-    n = t.shape[0] if t.ndim == 1 else -1
-    if n < 1 or p.shape != (n, 3) or q.shape != (n, 4):
-        raise ConfigError(f"`{name}`: expected t_s (N,), positions (N, 3), quat_xyzw (N, 4); "
-                          f"got {t.shape}, {p.shape}, {q.shape}")
+    t = as_times_s(t, f"{name} t_s")
+    n = t.shape[0]
+    if n < 1:
+        raise InputError(f"`{name}` has no poses")
+    p = as_vectors(p, f"{name} positions", n)
+    q = as_quat_xyzw(q, f"{name} quat_xyzw", n)
     return trajectory.PoseTrajectory3D(positions_xyz=p, orientations_quat_wxyz=q[:, [3, 0, 1, 2]],
                                        timestamps=t)
 
@@ -274,21 +293,14 @@ def compare(est, ref, *, metric: str = "ape", pose_relation: str = "trans", alig
     0.1
     """
     metrics, sync, _, _ = _evo()
-    if metric not in ("ape", "rpe", "both"):
-        raise ConfigError(f"Unknown metric {metric!r}; expected ape, rpe or both")
-    if pose_relation not in POSE_RELATIONS:
-        raise ConfigError(f"Unknown pose relation {pose_relation!r}; expected one of "
-                          f"{', '.join(POSE_RELATIONS)}")
-    if align not in ALIGN_MODES:
-        raise ConfigError(f"Unknown alignment {align!r}; expected one of {', '.join(ALIGN_MODES)}")
-    if delta_unit not in DELTA_UNITS:
-        raise ConfigError(f"Unknown delta unit {delta_unit!r}; expected one of {', '.join(DELTA_UNITS)}")
-    if not (np.isfinite(delta) and delta > 0):
-        raise ConfigError(f"RPE delta must be a positive number, got {delta}")
+    one_of(metric, "metric", ("ape", "rpe", "both"))
+    one_of(pose_relation, "pose_relation", tuple(POSE_RELATIONS))
+    one_of(align, "align", ALIGN_MODES)
+    one_of(delta_unit, "delta_unit", tuple(DELTA_UNITS))
+    delta = positive_float(delta, "delta")
     if delta_unit == "f" and float(delta) != int(delta):
-        raise ConfigError(f"RPE delta in frames must be a whole number, got {delta}")
-    if not (np.isfinite(t_max_diff) and t_max_diff >= 0):
-        raise ConfigError(f"--t-max-diff must be >= 0, got {t_max_diff}")
+        raise ConfigError(f"RPE delta in frames must be a whole number, got {delta}", option="delta")
+    t_max_diff = nonnegative_float(t_max_diff, "t_max_diff")
     relation = getattr(metrics.PoseRelation, POSE_RELATIONS[pose_relation])
 
     traj_est = _as_evo(est, "est")
@@ -341,6 +353,44 @@ def compare(est, ref, *, metric: str = "ape", pose_relation: str = "trans", alig
         ref_positions=np.array(traj_ref.positions_xyz, dtype=np.float64),
         est_positions_aligned=np.array(traj_est.positions_xyz, dtype=np.float64),
     )
+
+
+def compare_files(est_path, ref_path, *, plot=None, **options) -> CompareResult:
+    """APE / RPE of an estimated TUM file against a reference TUM file (what ``splineimu compare`` runs).
+
+    Parameters
+    ----------
+    est_path, ref_path : path-like
+        TUM files (note the order: estimate first, unlike evo's command line).
+    plot : path-like, optional
+        Also save :func:`plot_compare`'s figure there (:attr:`CompareResult.plot_path`).
+    **options
+        ``metric``, ``pose_relation``, ``align``, ``delta``, ``delta_unit``, ``all_pairs``,
+        ``t_max_diff``, ``t_offset`` of :func:`compare`.
+
+    Returns
+    -------
+    CompareResult
+
+    Raises
+    ------
+    SplineImuError, InputError, ConfigError
+        As :func:`compare`.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> d = pathlib.Path(tempfile.mkdtemp())
+    >>> _ = (d / "ref.tum").write_text("".join(f"{i}.0 {i} 0 0 0 0 0 1\\n" for i in range(5)))
+    >>> _ = (d / "est.tum").write_text("".join(f"{i}.0 {i} 0.5 0 0 0 0 1\\n" for i in range(5)))
+    >>> r = compare_files(d / "est.tum", d / "ref.tum", metric="both")
+    >>> round(float(r.ape.stats["max"]), 6), r.to_dataframe()["metric"].tolist()
+    (0.5, ['ape', 'rpe'])
+    """
+    res = compare(Path(est_path), Path(ref_path), **options)
+    if plot is not None:
+        res.plot_path = plot_compare(res, plot)
+    return res
 
 
 def plot_compare(result: CompareResult, path) -> Path:

@@ -18,7 +18,6 @@ from . import __version__
 from .errors import SplineImuError
 from .imu.ideal import Extrinsic, IdealImu, ideal_imu
 from .motion import DEFAULT_GRAVITY, MotionSource
-from .timegrid import uniform_stamps_ns  # noqa: F401 (re-exported for the commands)
 
 
 @dataclass
@@ -390,17 +389,12 @@ def _json_default(o):
 
 
 def _write_imu_yaml(path, syn):
+    """The sensor model used; for noise-free data the Kalibr keys at zero and the rate synthesized."""
+    from .imu.config import ImuConfig
+
     if syn.imu_config is not None:
         syn.imu_config.to_yaml(path)
         return
-    rate = float(1e9 / np.median(np.diff(syn.t_ns))) if syn.t_ns.size > 1 else 0.0
-    text = (
-        "# noise-free synthesis: no sensor model was given (use --imu IMU.yaml or a preset)\n"
-        "gyroscope_noise_density: 0.0\n"
-        "gyroscope_random_walk: 0.0\n"
-        "accelerometer_noise_density: 0.0\n"
-        "accelerometer_random_walk: 0.0\n"
-        f"update_rate: {rate:.12g}\n"
-    )
-    with open(path, "w") as fh:
-        fh.write(text)
+    rate = float(1e9 / np.median(np.diff(syn.t_ns))) if syn.t_ns.size > 1 else None
+    ImuConfig(update_rate=rate).to_yaml(
+        path, header="noise-free synthesis: no sensor model was given (use --imu IMU.yaml or a preset)")

@@ -13,16 +13,19 @@ from conftest import require_shared
 from splineimu.allan import (
     FLICKER_FLOOR,
     allan_deviation,
+    allan_output_paths,
+    analyze_recording,
     default_cluster_factors,
     edf_oadev,
     fit_noise_parameters,
     imu_noise_dict,
+    write_allan_outputs,
 )
 from splineimu.cli import main
-from splineimu.errors import InputError
+from splineimu.errors import ConfigError, InputError, OutputExistsError
 from splineimu.imu.config import load_imu_config
 from splineimu.imu.noise import SensorModel
-from splineimu.io.imu_csv import read_imu_csv, read_static_rda
+from splineimu.io.imu_csv import load_recording, read_imu_csv, read_static_rda
 
 RATE = 200.0
 
@@ -326,6 +329,38 @@ def test_cli_allan_writes_yaml_that_loads_back_and_a_plot(tmp_path, capsys):
     assert "file not found" in capsys.readouterr().err
 
 
+def test_analyze_recording_is_the_library_of_the_command(tmp_path):
+    data, cfg = static_imu(60.0, "adis16448", seed=7)
+    n = data.shape[0]
+    t_ns = 10**18 + np.arange(n, dtype=np.int64) * 5_000_000
+    t_ns[n // 2:] += 20_000_000  # one gap of 4 samples
+    csv = tmp_path / "imu.csv"
+    write_csv(csv, t_ns, np.rad2deg(data[:, :3]), data[:, 3:])
+    rec = load_recording(csv, gyro_unit="deg/s")
+    assert rec.rate_hz == 200.0 and rec.format == "euroc" and len(rec.notes) == 1 and "1 gap" in rec.notes[0]
+    np.testing.assert_allclose(rec.gyro_rad_s, data[:, :3], rtol=1e-14, atol=0)
+    a = analyze_recording(csv, gyro_unit="deg/s", points_per_decade=5)
+    ref = allan_deviation(rec.values, 200.0, points_per_decade=5)
+    np.testing.assert_array_equal(a.result.adev, ref.adev)
+    np.testing.assert_array_equal(a.fit.white_noise_density, fit_noise_parameters(ref).white_noise_density)
+    assert a.notes == rec.notes and a.source == str(csv) and a.result.labels[3] == "accel x"
+    df = a.to_dataframe()
+    assert df.shape == (6, 13) and df["white_noise_density"].tolist() == a.fit.white_noise_density.tolist()
+    out = tmp_path / "out"
+    assert write_allan_outputs(a, out) == [out / "allan.yaml"]
+    back = load_imu_config(out / "allan.yaml")
+    np.testing.assert_allclose(back.gyroscope_noise_density, a.fit.white_noise_density[:3], rtol=1e-5)
+    assert (out / "allan.yaml").read_text().startswith(f"# splineimu allan: noise parameters identified from {csv}")
+    with pytest.raises(OutputExistsError, match="--force"):
+        write_allan_outputs(a, out)
+    with pytest.raises(ConfigError, match="not a directory"):
+        allan_output_paths(csv)
+    with pytest.raises(ConfigError, match="rate_hz"):
+        load_recording(csv, rate_hz=-1.0)
+    with pytest.raises(ConfigError, match="format"):
+        load_recording(csv, fmt="bag")
+
+
 def test_imu_noise_dict_needs_six_axes():
     r = allan_deviation(np.random.default_rng(0).standard_normal((1000, 2)), 100.0)
     with pytest.raises(InputError, match="six-axis"):
@@ -337,7 +372,8 @@ def test_small_nnls_and_chi2_quantiles_match_scipy():
     from scipy.optimize import nnls
     from scipy.stats import chi2
 
-    from splineimu.allan import _chi2_ppf, _nnls
+    from splineimu.allan.deviation import _chi2_ppf
+    from splineimu.allan.fit import _nnls
 
     rng = np.random.default_rng(3)
     for _ in range(200):

@@ -235,7 +235,8 @@ def test_streamed_output_equals_the_whole_record_byte_for_byte(tmp_path, samplin
     """write_output of a SynthesisStream in small pieces (noise processes, quaternion signs
     and interval starts continuing across pieces) writes the same bytes as of one Synthesis."""
     from splineimu.imu.ideal import Extrinsic
-    from splineimu.pipeline import synthesize, synthesize_stream, uniform_stamps_ns, write_output
+    from splineimu.pipeline import synthesize, synthesize_stream, write_output
+    from splineimu.timegrid import uniform_stamps_ns
 
     scene = make_scene("flips", duration_s=6.0, t0_ns=1_700_000_000_123_456_789)
     t_ns = uniform_stamps_ns(scene.origin_ns, scene.origin_ns + 6_000_000_000, 400.0)

@@ -16,7 +16,7 @@ from conftest import require_shared
 from splineimu import cli
 from splineimu.errors import ConfigError, InputError, SplineImuError
 from splineimu.lie import matrix_to_quat_xyzw, quat_xyzw_to_matrix, so3_exp
-from splineimu.metrics import EVO_MISSING, compare
+from splineimu.metrics import EVO_MISSING, compare, compare_files
 from splineimu.scenes import make_scene
 
 pytest.importorskip("evo")
@@ -193,6 +193,20 @@ def test_plot(files, tmp_path, capsys):
     assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 20_000
 
 
+def test_compare_files_with_plot_and_tables(files, tmp_path):
+    png = tmp_path / "c.png"
+    r = compare_files(Path(files["est"]), Path(files["ref"]), plot=png, metric="both", align="se3",
+                      delta=1.0, delta_unit="s")
+    b = compare(files["est"], files["ref"], metric="both", align="se3", delta=1.0, delta_unit="s")
+    assert r.ape.stats == b.ape.stats and r.rpe.stats == b.rpe.stats
+    assert r.plot_path == png and png.read_bytes()[:4] == b"\x89PNG" and b.plot_path is None
+    df = r.to_dataframe()
+    assert df["metric"].tolist() == ["ape", "rpe"] and df["delta_frames"].tolist()[1] == r.rpe.delta_frames
+    assert df.loc[0, "rmse"] == r.ape.stats["rmse"] and df.loc[1, "max"] == r.rpe.stats["max"]
+    errs = r.rpe.to_dataframe()
+    assert list(errs.columns) == ["t_s", "error"] and errs["error"].max() == r.rpe.stats["max"]
+
+
 def test_trajectory_objects_and_tuples(files):
     # in-memory input: integrate-like objects or tuples give the same numbers as the files
     from evo.tools import file_interface
@@ -226,7 +240,7 @@ def test_errors(files, tmp_path, capsys, monkeypatch):
         compare(files["est"], files["ref"], metric="rpe", delta=1e6, delta_unit="m")
     with pytest.raises(ConfigError, match="whole number"):
         compare(files["est"], files["ref"], metric="rpe", delta=1.5, delta_unit="f")
-    with pytest.raises(ConfigError, match="Unknown alignment"):
+    with pytest.raises(ConfigError, match="`align` must be one of none, se3, sim3, origin, got 'umeyama'"):
         compare(files["est"], files["ref"], align="umeyama")
     # evo missing -> the install hint
     for mod in [m for m in sys.modules if m == "evo" or m.startswith("evo.")]:

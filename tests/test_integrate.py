@@ -8,8 +8,17 @@ from conftest import require_shared
 
 from splineimu import cli
 from splineimu._kernels.integrate import interp_mid_kernel
-from splineimu.errors import ConfigError, InputError
-from splineimu.integrate import METHOD_ORDER, METHODS, NavState, Trajectory, integrate
+from splineimu.errors import ConfigError, InputError, RangeError
+from splineimu.groundtruth import GroundTruth
+from splineimu.integrate import (
+    METHOD_ORDER,
+    METHODS,
+    NavState,
+    Trajectory,
+    dead_reckon,
+    default_groundtruth_path,
+    integrate,
+)
 from splineimu.lie import quat_xyzw_to_matrix, so3_exp, so3_log
 from splineimu.scenes import make_scene
 
@@ -191,7 +200,7 @@ def test_bad_inputs():
     t = np.arange(5) * 0.01
     z = np.zeros((5, 3))
     init = NavState(None, [0, 0, 0], [0, 0, 0, 1])
-    with pytest.raises(ConfigError, match="Unknown integration method 'heun'"):
+    with pytest.raises(ConfigError, match="`method` must be one of euler, midpoint, rk4, got 'heun'"):
         integrate(t, z, z, init, method="heun")
     with pytest.raises(InputError, match="strictly increasing"):
         integrate(t[[0, 1, 1, 3, 4]], z, z, init)
@@ -201,13 +210,13 @@ def test_bad_inputs():
         integrate(t[:1], z[:1], z[:1], init)
     bad = z.copy()
     bad[3, 1] = np.nan
-    with pytest.raises(InputError, match="`gyro` row 3"):
+    with pytest.raises(InputError, match=r"`gyro` contains NaN or inf \(first at index \(3, 1\)\)"):
         integrate(t, bad, z, init)
     with pytest.raises(ConfigError, match="must coincide"):
         integrate(t + 1.0, z, z, NavState(0.0, [0, 0, 0], [0, 0, 0, 1]))
-    with pytest.raises(ConfigError, match="quat_xyzw"):
+    with pytest.raises(InputError, match="`quat_xyzw` row 0 is a zero quaternion"):
         NavState(0.0, [0, 0, 0], [0, 0, 0, 0])
-    with pytest.raises(ConfigError, match=r"`velocity_world` to have shape \(3,\)"):
+    with pytest.raises(InputError, match=r"`velocity_world` to have shape \(3,\)"):
         NavState(0.0, [0, 0, 0], [0, 0, 0, 1], velocity_world=[1, 2])
 
 
@@ -324,3 +333,52 @@ def test_cli_integrate_euroc_real_data(tmp_path, capsys):
                      "-o", str(tmp_path / "g.tum")]) == 0
     drift = float(capsys.readouterr().out.split("differs from the ground truth by ")[1].split()[0])
     assert drift > 10.0
+
+
+# --------------------------------------------------------------------------------- library
+
+
+def test_dead_reckon_library_equals_cli(tmp_path, capsys):
+    scene = make_scene("ellipse", duration_s=5.0, t0_ns=5_000_000_000)
+    t_ns = _write_dataset(tmp_path / "d", scene, 200.0, gt_every=2, gt_shift_ns=-2_500_000, gt_start=10)
+    imu = tmp_path / "d" / "imu0" / "data.csv"
+    res = dead_reckon(imu, method="midpoint")
+    assert res.skipped_samples == 10 and res.method == "midpoint"
+    np.testing.assert_array_equal(res.t_ns, t_ns[10:])
+    assert res.groundtruth_path == default_groundtruth_path(imu)
+    df = res.to_dataframe()
+    assert list(df.columns[:3]) == ["t_ns", "t_s", "px"] and len(df) == t_ns.size - 10
+    assert res.final_position_error_m is None  # the last IMU stamp is 2.5 ms after the ground truth
+    lib = res.write_tum(tmp_path / "lib.tum")
+    assert cli.main(["integrate", str(imu), "--method", "midpoint", "-o", str(tmp_path / "cli.tum")]) == 0
+    assert "differs from the ground truth" not in capsys.readouterr().out
+    assert lib.read_bytes() == (tmp_path / "cli.tum").read_bytes()
+    with pytest.raises(ConfigError, match="output folder does not exist"):
+        res.write_tum(tmp_path / "nope" / "x.tum")
+    with pytest.raises(ConfigError, match="`method` must be one of"):
+        dead_reckon(imu, method="rk5")
+
+
+def test_groundtruth_interpolation():
+    angle = 0.8
+    q = np.array([[0.0, 0.0, 0.0, 1.0], [0.0, 0.0, np.sin(angle / 2), np.cos(angle / 2)]])
+    p = np.array([[0.0, 0.0, 0.0], [2.0, 4.0, -6.0]])
+    gt = GroundTruth([100, 300], p, q, p * 10, p * 0.1, p * 0.01, path="gt.csv")
+    s = gt.state_at(150)  # u = 1/4
+    np.testing.assert_allclose(s.position_world, [0.5, 1.0, -1.5], rtol=0, atol=1e-15)
+    np.testing.assert_allclose(s.velocity_world, [5.0, 10.0, -15.0], rtol=0, atol=1e-14)
+    np.testing.assert_allclose(s.bias_accel, [0.005, 0.01, -0.015], rtol=0, atol=1e-17)
+    np.testing.assert_allclose(so3_log(s.world_R_body), [0.0, 0.0, angle / 4], atol=1e-15)
+    np.testing.assert_allclose(quat_xyzw_to_matrix(s.quat_xyzw), s.world_R_body, atol=1e-15)
+    end = gt.state_at(300)  # a stamp: the stored row itself
+    np.testing.assert_array_equal(end.quat_xyzw, q[1])
+    np.testing.assert_array_equal(end.position_world, p[1])
+    assert gt.covers(100) and not gt.covers(301)
+    with pytest.raises(RangeError, match=r"gt\.csv: time 99 ns is outside the ground truth \[100, 300\] ns"):
+        gt.state_at(99)
+    from splineimu.io.poses import PoseTrack
+
+    with pytest.raises(InputError, match="17-column"):
+        GroundTruth.from_track(PoseTrack(np.array([0, 1]), p, q))
+    with pytest.raises(InputError, match="strictly increasing"):
+        GroundTruth([5, 5], p, q, p, p, p)

@@ -210,7 +210,7 @@ def test_inputs_are_not_modified_and_validated():
         sm.apply(t, g, a)
     with pytest.raises(ConfigError, match="rng"):
         sm.apply(t, g0, a, rng="seed")
-    with pytest.raises(ConfigError, match="non-negative"):
+    with pytest.raises(ConfigError, match="`rng` must be between 0"):
         sm.apply(t, g0, a, rng=-1)
 
 

@@ -20,9 +20,11 @@ from splineimu.lie import matrix_to_quat_xyzw, so3_exp, so3_log
 from splineimu.preintegration import (
     Preintegrator,
     delta_error,
+    evaluate_recording,
     evaluate_windows,
     exact_deltas,
     nees,
+    noise_densities,
 )
 from splineimu.scenes import make_scene
 
@@ -508,7 +510,7 @@ def test_validation_errors():
         Preintegrator(0.1, 0.1, 0, 0, covariance="exact")
     with pytest.raises(ConfigError):
         Preintegrator(-0.1, 0.1, 0, 0)
-    with pytest.raises(ConfigError):
+    with pytest.raises(InputError, match=r"Expected `gyro_noise_density` to have shape \(3,\), got \(2,\)"):
         Preintegrator([0.1, 0.1], 0.1, 0, 0)
     pre = Preintegrator([0.1, 0.2, 0.3], 0.1, 0, 0)
     with pytest.raises(InputError, match="gyro"):
@@ -587,22 +589,34 @@ def test_cli_preintegrate(tmp_path, capsys):
 def test_evaluate_windows_matches_manual_preintegration(tmp_path):
     out = tmp_path / "o"
     _write_out_folder(out, LECTURE_NOISE, duration_s=2.0)
-    from splineimu.commands.preintegrate import read_euroc_groundtruth, read_noise_yaml
+    from splineimu.groundtruth import read_groundtruth
     from splineimu.io.imu_csv import read_imu_csv
 
     t_ns, g, a = read_imu_csv(out / "imu0" / "data.csv")
-    gt = read_euroc_groundtruth(out / "state_groundtruth_estimate0" / "data.csv")
-    noise = read_noise_yaml(out / "imu.yaml")
-    res = evaluate_windows(t_ns, g, a, *gt, [[t_ns[10], t_ns[210]]], noise=noise)
-    pre = Preintegrator(*LECTURE_NOISE, gt[4][10], gt[5][10]).integrate((t_ns[10:211] - t_ns[10]) * 1e-9,
-                                                                        g[10:211], a[10:211])
-    r = pre.residual(gt[1][10], gt[2][10], gt[3][10], gt[5][10], gt[4][10],
-                     gt[1][210], gt[2][210], gt[3][210], gt[5][210], gt[4][210])
+    gt = read_groundtruth(out / "state_groundtruth_estimate0" / "data.csv")
+    noise = noise_densities(out / "imu.yaml")
+    res = evaluate_windows(t_ns, g, a, gt, [[t_ns[10], t_ns[210]]], noise=noise)
+    pre = Preintegrator(*LECTURE_NOISE, gt.bias_gyro[10], gt.bias_accel[10]).integrate(
+        (t_ns[10:211] - t_ns[10]) * 1e-9, g[10:211], a[10:211])
+    p, q, v, bg, ba = gt.position_world, gt.quat_xyzw, gt.velocity_world, gt.bias_gyro, gt.bias_accel
+    r = pre.residual(p[10], q[10], v[10], ba[10], bg[10], p[210], q[210], v[210], ba[210], bg[210])
     np.testing.assert_allclose(res.error[0, [0, 1, 2, 6, 7, 8]], r[[0, 1, 2, 6, 7, 8]], atol=1e-12)
     # Log(q) vs VINS's 2 vec(q): they differ by ~|theta|^3 / 24 (theta ~ 0.03 rad here)
     th = np.linalg.norm(r[3:6])
     np.testing.assert_allclose(res.error[0, 3:6], r[3:6], atol=th ** 3 / 12)
     assert res.nees[0] == pytest.approx(nees(res.error[0], pre.covariance[:9, :9]), rel=1e-9)
+    # the same window through the recording job, and its summary
+    rec = evaluate_recording(out, stamps=[t_ns[10], t_ns[210]])
+    np.testing.assert_array_equal(rec.error, res.error)
+    assert rec.noise_source == str(out / "imu.yaml") and rec.n_nees == 1
+    test = rec.nees_test()
+    assert test.n_windows == 1 and test.mean == res.nees[0]
+    lo, hi = stats.chi2.ppf([0.025, 0.975], 9)
+    assert (test.low, test.high) == pytest.approx((lo, hi), rel=1e-12)
+    assert rec.format_table().splitlines()[0].split() == ["t_i_s", "dt_s", "samples", "err_p_m", "err_v_m_s",
+                                                          "err_theta_deg", "nees9"]
+    with pytest.raises(ConfigError, match="fewer than 2 stamps"):
+        evaluate_recording(out, stamps=[t_ns[10]])
 
 
 @pytest.mark.data

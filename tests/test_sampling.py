@@ -6,8 +6,9 @@ import numpy as np
 from scipy.integrate import quad
 
 from splineimu import lie
-from splineimu.pipeline import synthesize, uniform_stamps_ns
+from splineimu.pipeline import synthesize
 from splineimu.scenes import make_scene
+from splineimu.timegrid import uniform_stamps_ns
 
 
 def test_mean_sampling_is_the_interval_average():

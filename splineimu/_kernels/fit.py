@@ -20,13 +20,13 @@ import numpy as np
 
 from .._jit import jit
 from .lie import (
-    _hat_into,
     se3_q_block_into,
     so3_exp_into,
     so3_jacobian_into,
     so3_jacobian_inv_into,
     so3_log_into,
 )
+from .lie import so3_hat_into as _hat_into
 from .spline import _segment
 
 

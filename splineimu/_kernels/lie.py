@@ -1,8 +1,10 @@
-"""SO3 / SE3 kernels on rotation matrices.
+"""SO3 / SE3 kernels on rotation matrices and (w, x, y, z) quaternions.
 
 Conventions: right perturbation on the manifold, SE3 tangent order ``[rho, phi]``
-(translation first). Scalar helpers write into preallocated outputs so they can be called
-inside hot loops without allocating; the ``*_batch`` kernels loop over samples.
+(translation first). This module holds the one implementation of Exp, Log and their
+Jacobians: single-element functions (``*_into``) that write into preallocated outputs so that
+other kernels call them inside hot loops without allocating, and ``*_batch`` kernels that are
+nothing but a loop of one element function over samples (tests check them bit for bit).
 """
 
 from __future__ import annotations
@@ -27,18 +29,29 @@ JAC_SMALL_ANGLE = 1e-1
 SE3_Q_SMALL_ANGLE = 0.5
 
 
-@jit
-def so3_exp_into(x, y, z, R):
-    """R = Exp([x, y, z]) (Rodrigues, with a Taylor branch near 0)."""
-    t2 = x * x + y * y + z * z
+@jit(inline="always")
+def so3_exp_coeffs(t2):
+    """The coefficients of Exp for t^2 = t2: (sin t/t, (1 - cos t)/t^2) of the matrix
+    I + a K + b K^2 and (cos(t/2), sin(t/2)/t) of the quaternion. Below EXP_SMALL_ANGLE all by
+    their series to t^4 (error < t^6 / 5040)."""
     if t2 < EXP_SMALL_ANGLE * EXP_SMALL_ANGLE:
         a = 1.0 - t2 / 6.0 + t2 * t2 / 120.0
         b = 0.5 - t2 / 24.0 + t2 * t2 / 720.0
+        c = 1.0 - t2 / 8.0 + t2 * t2 / 384.0
+        s = 0.5 - t2 / 48.0 + t2 * t2 / 3840.0
     else:
         t = math.sqrt(t2)
         a = math.sin(t) / t
         s = math.sin(0.5 * t) / t
         b = 2.0 * s * s
+        c = math.cos(0.5 * t)
+    return a, b, c, s
+
+
+@jit
+def so3_exp_into(x, y, z, R):
+    """R = Exp([x, y, z]) = I + a K + b K^2 (Rodrigues; coefficients from so3_exp_coeffs)."""
+    a, b, _, _ = so3_exp_coeffs(x * x + y * y + z * z)
     xx = x * x
     yy = y * y
     zz = z * z
@@ -86,11 +99,36 @@ def mat_to_quat_wxyz_into(R, q):
         z = 0.25 * s
     if w < 0.0:
         w, x, y, z = -w, -x, -y, -z
+    quat_wxyz_normalize_into(w, x, y, z, q)
+
+
+@jit(inline="always")
+def quat_wxyz_normalize_into(w, x, y, z, q):
+    """q = (w, x, y, z) / |(w, x, y, z)|."""
     n = math.sqrt(w * w + x * x + y * y + z * z)
     q[0] = w / n
     q[1] = x / n
     q[2] = y / n
     q[3] = z / n
+
+
+@jit(inline="always")
+def quat_wxyz_mul_into(a, b, q):
+    """Hamilton product q = a * b of (w, x, y, z) quaternions (q must not alias a or b)."""
+    q[0] = a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3]
+    q[1] = a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2]
+    q[2] = a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1]
+    q[3] = a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0]
+
+
+@jit(inline="always")
+def so3_exp_quat_wxyz_into(x, y, z, q):
+    """q = Exp([x, y, z]) as a unit quaternion: (cos(t/2), sin(t/2)/t [x, y, z])."""
+    _, _, c, s = so3_exp_coeffs(x * x + y * y + z * z)
+    q[0] = c
+    q[1] = s * x
+    q[2] = s * y
+    q[3] = s * z
 
 
 @jit
@@ -167,11 +205,8 @@ def so3_jac_inv_coeff(t2):
 
 
 @jit
-def so3_jacobian_into(x, y, z, sign, J):
-    """Right (sign = -1) or left (sign = +1) Jacobian: I + sign b K + c K^2."""
-    t2 = x * x + y * y + z * z
-    _, b, c = so3_jac_coeffs(t2)
-    b *= sign
+def _i_plus_bk_ck2_into(x, y, z, b, c, J):
+    """J = I + b K + c K^2 for K = [x, y, z]x (the form of every SO3 Jacobian and inverse)."""
     xx = x * x
     yy = y * y
     zz = z * z
@@ -187,27 +222,22 @@ def so3_jacobian_into(x, y, z, sign, J):
 
 
 @jit
-def so3_jacobian_inv_into(x, y, z, sign, J):
-    """Inverse right (sign = -1) or left (sign = +1) Jacobian: I - sign K/2 + d K^2."""
-    t2 = x * x + y * y + z * z
-    d = so3_jac_inv_coeff(t2)
-    b = -0.5 * sign
-    xx = x * x
-    yy = y * y
-    zz = z * z
-    J[0, 0] = 1.0 - d * (yy + zz)
-    J[0, 1] = -b * z + d * x * y
-    J[0, 2] = b * y + d * x * z
-    J[1, 0] = b * z + d * x * y
-    J[1, 1] = 1.0 - d * (xx + zz)
-    J[1, 2] = -b * x + d * y * z
-    J[2, 0] = -b * y + d * x * z
-    J[2, 1] = b * x + d * y * z
-    J[2, 2] = 1.0 - d * (xx + yy)
+def so3_jacobian_into(x, y, z, sign, J):
+    """Right (sign = -1) or left (sign = +1) Jacobian: I + sign b K + c K^2."""
+    _, b, c = so3_jac_coeffs(x * x + y * y + z * z)
+    _i_plus_bk_ck2_into(x, y, z, sign * b, c, J)
 
 
 @jit
-def _hat_into(x, y, z, K):
+def so3_jacobian_inv_into(x, y, z, sign, J):
+    """Inverse right (sign = -1) or left (sign = +1) Jacobian: I - sign K/2 + d K^2."""
+    d = so3_jac_inv_coeff(x * x + y * y + z * z)
+    _i_plus_bk_ck2_into(x, y, z, -0.5 * sign, d, J)
+
+
+@jit
+def so3_hat_into(x, y, z, K):
+    """K = [x, y, z]x, the skew-symmetric matrix with K v = [x, y, z] x v."""
     K[0, 0] = 0.0
     K[0, 1] = -z
     K[0, 2] = y
@@ -233,8 +263,8 @@ def se3_q_block_into(rho, phi, sign, Q, scratch):
     Rh = scratch[1]
     A = scratch[2]
     B = scratch[3]
-    _hat_into(px, py, pz, P)
-    _hat_into(sign * rho[0], sign * rho[1], sign * rho[2], Rh)
+    so3_hat_into(px, py, pz, P)
+    so3_hat_into(sign * rho[0], sign * rho[1], sign * rho[2], Rh)
     t2 = px * px + py * py + pz * pz
     if t2 < SE3_Q_SMALL_ANGLE * SE3_Q_SMALL_ANGLE:
         # c1 = sum (-t2)^k / (2k+3)!, c2 = sum (-t2)^k / (2k+4)!, c4 = sum (-t2)^k (k+1) / (2k+5)!
@@ -285,7 +315,86 @@ def se3_q_block_into(rho, phi, sign, Q, scratch):
             )
 
 
+@jit
+def se3_exp_into(xi, R, t, J):
+    """(R, t) = Exp(xi) for xi = [rho, phi]: R = Exp(phi), t = J_l(phi) rho. J: (3, 3) scratch."""
+    so3_exp_into(xi[3], xi[4], xi[5], R)
+    so3_jacobian_into(xi[3], xi[4], xi[5], 1.0, J)
+    for r in range(3):
+        t[r] = J[r, 0] * xi[0] + J[r, 1] * xi[1] + J[r, 2] * xi[2]
+
+
+@jit
+def se3_log_into(R, t, q, J, xi):
+    """xi = Log((R, t)) = [J_l(phi)^-1 t, phi] with phi = Log(R). q: (4,), J: (3, 3) scratch."""
+    so3_log_into(R, q, xi[3:])
+    so3_jacobian_inv_into(xi[3], xi[4], xi[5], 1.0, J)
+    for r in range(3):
+        xi[r] = J[r, 0] * t[0] + J[r, 1] * t[1] + J[r, 2] * t[2]
+
+
+@jit
+def _zero_lower_left_into(J):
+    for r in range(3):
+        for c in range(3):
+            J[3 + r, c] = 0.0
+
+
+@jit
+def se3_jacobian_into(xi, sign, J, scratch):
+    """Left (sign = +1) or right (sign = -1) SE3 Jacobian (6, 6): [[J(phi), Q], [0, J(phi)]].
+
+    scratch: (4, 3, 3) work array.
+    """
+    so3_jacobian_into(xi[3], xi[4], xi[5], sign, J[:3, :3])
+    so3_jacobian_into(xi[3], xi[4], xi[5], sign, J[3:, 3:])
+    se3_q_block_into(xi[:3], xi[3:], sign, J[:3, 3:], scratch)
+    _zero_lower_left_into(J)
+
+
+@jit
+def se3_jacobian_inv_into(xi, sign, J, scratch):
+    """Inverse left (sign = +1) or right (sign = -1) SE3 Jacobian: [[Ji, -Ji Q Ji], [0, Ji]].
+
+    scratch: (5, 3, 3) work array (the Q block goes to scratch[4]).
+    """
+    so3_jacobian_inv_into(xi[3], xi[4], xi[5], sign, J[:3, :3])
+    so3_jacobian_inv_into(xi[3], xi[4], xi[5], sign, J[3:, 3:])
+    Q = scratch[4]
+    se3_q_block_into(xi[:3], xi[3:], sign, Q, scratch)
+    for r in range(3):
+        for c in range(3):
+            s = 0.0
+            for m in range(3):
+                for n in range(3):
+                    s += J[r, m] * Q[m, n] * J[n, c]
+            J[r, 3 + c] = -s
+    _zero_lower_left_into(J)
+
+
+@jit
+def se3_adjoint_into(R, t, Ad):
+    """Ad = [[R, [t]x R], [0, R]], so that T Exp(xi) T^-1 = Exp(Ad xi) for T = (R, t)."""
+    for r in range(3):
+        for c in range(3):
+            Ad[r, c] = R[r, c]
+            Ad[3 + r, 3 + c] = R[r, c]
+            Ad[3 + r, c] = 0.0
+    # [t]x R, column by column: t x R[:, c]
+    for c in range(3):
+        Ad[0, 3 + c] = t[1] * R[2, c] - t[2] * R[1, c]
+        Ad[1, 3 + c] = t[2] * R[0, c] - t[0] * R[2, c]
+        Ad[2, 3 + c] = t[0] * R[1, c] - t[1] * R[0, c]
+
+
 # ----------------------------------------------------------------------------- batches
+# Each is one element function in a loop (scratch allocated once); no arithmetic of its own.
+
+
+@jit
+def so3_hat_batch(phi, out):
+    for i in range(phi.shape[0]):
+        so3_hat_into(phi[i, 0], phi[i, 1], phi[i, 2], out[i])
 
 
 @jit
@@ -303,9 +412,11 @@ def so3_log_batch(R, out):
 
 @jit
 def quat_wxyz_log_batch(q, out):
+    """Log of (w, x, y, z) quaternions of any norm and sign: normalized, then quat_wxyz_log_into."""
+    u = np.empty(4)
     for i in range(q.shape[0]):
-        n = math.sqrt(q[i, 0] ** 2 + q[i, 1] ** 2 + q[i, 2] ** 2 + q[i, 3] ** 2)
-        quat_wxyz_log_into(q[i, 0] / n, q[i, 1] / n, q[i, 2] / n, q[i, 3] / n, out[i])
+        quat_wxyz_normalize_into(q[i, 0], q[i, 1], q[i, 2], q[i, 3], u)
+        quat_wxyz_log_into(u[0], u[1], u[2], u[3], out[i])
 
 
 @jit
@@ -338,57 +449,34 @@ def se3_exp_batch(xi, out):
     J = np.empty((3, 3))
     for i in range(xi.shape[0]):
         T = out[i]
-        so3_exp_into(xi[i, 3], xi[i, 4], xi[i, 5], T[:3, :3])
-        so3_jacobian_into(xi[i, 3], xi[i, 4], xi[i, 5], 1.0, J)
-        for r in range(3):
-            T[r, 3] = J[r, 0] * xi[i, 0] + J[r, 1] * xi[i, 1] + J[r, 2] * xi[i, 2]
-            T[3, r] = 0.0
+        se3_exp_into(xi[i], T[:3, :3], T[:3, 3], J)
+        T[3, :3] = 0.0
         T[3, 3] = 1.0
 
 
 @jit
 def se3_log_batch(T, out):
     q = np.empty(4)
-    phi = np.empty(3)
     J = np.empty((3, 3))
     for i in range(T.shape[0]):
-        so3_log_into(T[i, :3, :3], q, phi)
-        so3_jacobian_inv_into(phi[0], phi[1], phi[2], 1.0, J)
-        for r in range(3):
-            out[i, r] = J[r, 0] * T[i, 0, 3] + J[r, 1] * T[i, 1, 3] + J[r, 2] * T[i, 2, 3]
-            out[i, 3 + r] = phi[r]
+        se3_log_into(T[i, :3, :3], T[i, :3, 3], q, J, out[i])
 
 
 @jit
 def se3_jacobian_batch(xi, sign, out):
-    """Left (sign = +1) or right (sign = -1) SE3 Jacobian, (N, 6, 6)."""
     scratch = np.empty((4, 3, 3))
     for i in range(xi.shape[0]):
-        J = out[i]
-        so3_jacobian_into(xi[i, 3], xi[i, 4], xi[i, 5], sign, J[:3, :3])
-        so3_jacobian_into(xi[i, 3], xi[i, 4], xi[i, 5], sign, J[3:, 3:])
-        se3_q_block_into(xi[i, :3], xi[i, 3:], sign, J[:3, 3:], scratch)
-        for r in range(3):
-            for c in range(3):
-                J[3 + r, c] = 0.0
+        se3_jacobian_into(xi[i], sign, out[i], scratch)
 
 
 @jit
 def se3_jacobian_inv_batch(xi, sign, out):
-    """Inverse left (sign = +1) or right (sign = -1) SE3 Jacobian: [[Ji, -Ji Q Ji], [0, Ji]]."""
-    scratch = np.empty((4, 3, 3))
-    Q = np.empty((3, 3))
+    scratch = np.empty((5, 3, 3))
     for i in range(xi.shape[0]):
-        J = out[i]
-        so3_jacobian_inv_into(xi[i, 3], xi[i, 4], xi[i, 5], sign, J[:3, :3])
-        so3_jacobian_inv_into(xi[i, 3], xi[i, 4], xi[i, 5], sign, J[3:, 3:])
-        se3_q_block_into(xi[i, :3], xi[i, 3:], sign, Q, scratch)
-        Ji = J[:3, :3]
-        for r in range(3):
-            for c in range(3):
-                s = 0.0
-                for m in range(3):
-                    for n in range(3):
-                        s += Ji[r, m] * Q[m, n] * Ji[n, c]
-                J[r, 3 + c] = -s
-                J[3 + r, c] = 0.0
+        se3_jacobian_inv_into(xi[i], sign, out[i], scratch)
+
+
+@jit
+def se3_adjoint_batch(T, out):
+    for i in range(T.shape[0]):
+        se3_adjoint_into(T[i, :3, :3], T[i, :3, 3], out[i])

@@ -1,79 +1,135 @@
-"""Options and steps shared by the synthesis commands (scene, from-tum, from-euroc, run)."""
+"""Flags of the synthesis commands (from-tum, from-euroc, scene) and their one options builder.
+
+Every flag here stands for one field of :mod:`splineimu.api.options` (the table
+:data:`~splineimu.api.options.FLAGS`); flags not given stay ``None`` so that the options'
+own defaults apply, exactly as for a scene file.
+"""
 
 from __future__ import annotations
 
 import argparse
 import sys
-import time
-
-from ..errors import ConfigError
 
 
-def add_output_args(p: argparse.ArgumentParser, required=False):
+def add_output_args(p: argparse.ArgumentParser):
     g = p.add_argument_group("output")
-    g.add_argument("-o", "--out", metavar="OUT", required=required,
+    g.add_argument("-o", "--out", metavar="OUT",
                    help="output folder (EuRoC-like layout: imu0/, state_groundtruth_estimate0/, "
                         "groundtruth.tum, imu.yaml, report.json)")
-    g.add_argument("--force", action="store_true", help="replace an existing non-empty output folder")
+    g.add_argument("--force", action="store_true", default=None,
+                   help="replace an existing non-empty output folder")
     g.add_argument("--bag", choices=["ros1", "ros2"],
                    help="also write a ROS bag (sensor_msgs/Imu on /imu0, geometry_msgs/PoseStamped ground truth)")
-    g.add_argument("--plot", action="store_true", help="also write PNG plots of the IMU signals (and fit residuals)")
+    g.add_argument("--plot", action="store_true", default=None,
+                   help="also write PNG plots of the IMU signals (and fit residuals)")
 
 
-def add_imu_args(p: argparse.ArgumentParser, rate_default=200.0):
+def add_imu_args(p: argparse.ArgumentParser):
     g = p.add_argument_group("IMU")
-    g.add_argument("--rate", type=float, default=rate_default, metavar="HZ",
-                   help=f"IMU sample rate (default {rate_default:g})")
+    g.add_argument("--rate", type=float, metavar="HZ", help="IMU sample rate (default 200)")
+    g.add_argument("--timestamps", metavar="FILE",
+                   help="synthesize at exactly these stamps (first column, ns or decimal seconds; "
+                        "e.g. a real imu0/data.csv); stamps outside the motion's span are dropped")
     g.add_argument("--imu", metavar="IMU.yaml",
-                   help="sensor model: Kalibr imu.yaml (plus optional extra keys) or a preset name "
-                        "(e.g. adis16448); without it the output is noise-free")
-    g.add_argument("--seed", type=int, default=None, help="seed of the sensor model's random streams")
-    g.add_argument("--extrinsic", metavar="FILE", help="YAML with body_T_sensor (T_BS 4x4, or translation + quat_xyzw)")
-    g.add_argument("--sampling", choices=["point", "mean"], default="point",
+                   help="sensor model: Kalibr imu.yaml (plus optional extra keys), a preset name "
+                        "(e.g. adis16448) or an inline YAML mapping '{gyroscope_noise_density: 0.01, ...}'; "
+                        "without it the output is noise-free")
+    g.add_argument("--seed", type=int, help="seed of the sensor model's random streams")
+    g.add_argument("--extrinsic", metavar="FILE",
+                   help="YAML with body_T_sensor (T_BS 4x4, or translation + quat_xyzw), or that mapping inline")
+    g.add_argument("--sampling", choices=["point", "mean"],
                    help="point: value at the stamp (default); mean: average over [previous stamp, stamp], "
                         "as an IMU's anti-alias / integrating front end gives")
-    g.add_argument("--increments", action="store_true",
+    g.add_argument("--increments", action="store_true", default=None,
                    help="also write imu0/increments.csv: delta-angle and delta-velocity per interval")
-    g.add_argument("--gravity", type=float, nargs=3, default=(0.0, 0.0, -9.81), metavar=("GX", "GY", "GZ"),
+    g.add_argument("--gravity", type=float, nargs=3, metavar=("GX", "GY", "GZ"),
                    help="world gravity vector [m/s^2] (default 0 0 -9.81)")
 
 
-def load_extrinsic(path):
-    if not path:
-        return None
-    from ..imu.ideal import Extrinsic
+def add_pose_args(p: argparse.ArgumentParser, fmt_help: str):
+    p.add_argument("poses", metavar="POSES", help=fmt_help)
+    add_imu_args(p)
+    g = p.add_argument_group("spline")
+    g.add_argument("--spline", choices=["split", "se3"],
+                   help="split: R3 x SO3 (default, decoupled); se3: Lovegrove et al.'s cumulative SE3")
+    g.add_argument("--order", metavar="K",
+                   help="spline order 4 (cubic) .. 6, or auto (default: the best predicted of 4, 5, 6)")
+    g.add_argument("--knot-spacing", metavar="S",
+                   help="knot spacing in seconds, or auto (default: minimizes the predicted IMU error)")
+    g.add_argument("--smoothness", type=float, metavar="MU",
+                   help="relative weight of the smoothness penalty (default 1e-10; gaps get 1e-3)")
+    g = p.add_argument_group("gaps")
+    g.add_argument("--max-gap", type=float, metavar="S",
+                   help="longest gap bridged silently (default 0.5 s, or 5x the median spacing if larger)")
+    g.add_argument("--gaps", choices=["error", "bridge", "split"],
+                   help="longer gaps: stop (default), fit through them, or write one folder per piece")
+    g = p.add_argument_group("input hygiene")
+    g.add_argument("--repeated-stamps", choices=["error", "first"],
+                   help="a stamp repeated with a different pose: stop (default) or keep the first row")
+    g.add_argument("--keep-outliers", action="store_true", default=None,
+                   help="do not drop poses whose fit residual is beyond 8 robust sigmas")
+    add_output_args(p)
 
-    return Extrinsic.from_file(path)
+
+def _given(args, **fields) -> dict:
+    """``{field: value}`` of the flags given (``fields`` maps option field -> argparse dest)."""
+    return {f: getattr(args, dest) for f, dest in fields.items() if getattr(args, dest, None) is not None}
 
 
-def seed_or_default(seed):
-    """A given seed, or a fresh one that is reported so that the run can be repeated."""
-    if seed is not None:
-        if seed < 0:
-            raise ConfigError(f"--seed must be non-negative, got {seed}")
-        return int(seed)
-    import numpy as np
+def _params(items) -> dict:
+    from ..errors import ConfigError
 
-    return int(np.random.SeedSequence().entropy % (2**63))
+    params = {}
+    for it in items or ():
+        if "=" not in it:
+            raise ConfigError(f"--param expects KEY=VALUE, got {it!r}", option="--param")
+        k, v = it.split("=", 1)
+        params[k.strip()] = v.strip()
+    return params
+
+
+def options_from_args(args, motion: str):
+    """The :class:`~splineimu.api.options.SynthesisJob` of parsed flags.
+
+    ``motion`` is ``"tum"``, ``"euroc"`` (a pose file of that format) or ``"scene"``. Errors
+    name the flag.
+    """
+    from pathlib import Path
+
+    from ..api.options import FlagOrigin, ImuOptions, OutputOptions, PosesInput, SceneInput, SplineOptions, SynthesisJob
+
+    o = FlagOrigin()
+    if motion == "scene":
+        source = SceneInput(args.name, **_given(args, duration_s="duration", t0_ns="t0_ns"),
+                            params=_params(args.param), origin=o)
+    else:
+        spline = SplineOptions(**_given(args, kind="spline", order="order", knot_spacing_s="knot_spacing",
+                                        smoothness="smoothness", keep_outliers="keep_outliers"), origin=o)
+        source = PosesInput(args.poses, motion, **_given(args, repeated_stamps="repeated_stamps",
+                                                         max_gap_s="max_gap", gaps="gaps"), spline=spline, origin=o)
+        if args.out is None:
+            args.out = Path(args.poses).stem + "_imu"
+    imu = ImuOptions(**_given(args, rate_hz="rate", timestamps="timestamps", model="imu", extrinsic="extrinsic",
+                              gravity="gravity", sampling="sampling", increments="increments", seed="seed"),
+                     origin=o)
+    output = OutputOptions(**_given(args, dir="out", force="force", bag="bag", plot="plot", tum="tum"), origin=o)
+    return SynthesisJob(source, imu, output)
+
+
+def echo(text: str, note: bool = False):
+    print(text, file=sys.stderr if note else sys.stdout, flush=True)
+
+
+def run_synthesis(job) -> int:
+    """Run a job, printing its summary as it goes."""
+    from ..api.synthesis import run_job
+
+    run_job(job, echo=echo)
+    return 0
 
 
 def say(msg=""):
     print(msg, flush=True)
-
-
-def summary(out_report: dict, out_dir, t0_wall: float):
-    imu = out_report["imu"]
-    span_s = (imu["last_ns"] - imu["first_ns"]) / 1e9 if imu["samples"] else 0.0
-    say(f"imu           {imu['samples']} samples, {span_s:.3f} s from {imu['first_ns']} ns "
-        f"({imu['noise']}{'' if imu['seed'] is None else ', seed ' + str(imu['seed'])})")
-    say(f"written       {out_dir}  ({time.perf_counter() - t0_wall:.2f} s)")
-
-
-def fail_fast_output(args):
-    from ..io.output import check_output_dir
-
-    if args.out:
-        check_output_dir(args.out, args.force)
 
 
 def stderr(msg):

@@ -47,16 +47,15 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
-    from ..metrics import compare, plot_compare
+    from ..metrics import compare_files
 
-    res = compare(args.est, args.ref, metric=args.metric, pose_relation=args.pose_relation,
-                  align=args.align, delta=args.delta, delta_unit=args.delta_unit,
-                  all_pairs=args.all_pairs, t_max_diff=args.t_max_diff, t_offset=args.t_offset)
+    res = compare_files(args.est, args.ref, plot=args.plot, metric=args.metric, pose_relation=args.pose_relation,
+                        align=args.align, delta=args.delta, delta_unit=args.delta_unit, all_pairs=args.all_pairs,
+                        t_max_diff=args.t_max_diff, t_offset=args.t_offset)
     for r in res.results:
         if r.delta_frames is not None:
             print(f"(delta {args.delta:g} s = {r.delta_frames} frames)")
         print(r.pretty_str())
-    if args.plot:
-        out = plot_compare(res, args.plot)
-        print(f"plot saved to {out}")
+    if res.plot_path is not None:
+        print(f"plot saved to {res.plot_path}")
     return 0

@@ -16,13 +16,12 @@ examples:
 
 
 def add_arguments(p):
-    from ._from_poses import add_pose_args
+    from ._common import add_pose_args
 
     add_pose_args(p, "EuRoC ground-truth csv")
 
 
 def run(args) -> int:
-    from ..io.euroc import read_euroc_groundtruth
-    from ._from_poses import run_from_poses
+    from ._common import options_from_args, run_synthesis
 
-    return run_from_poses(args, read_euroc_groundtruth)
+    return run_synthesis(options_from_args(args, "euroc"))

@@ -20,13 +20,12 @@ examples:
 
 
 def add_arguments(p):
-    from ._from_poses import add_pose_args
+    from ._common import add_pose_args
 
     add_pose_args(p, "TUM pose file: 'timestamp[s] x y z qx qy qz qw' per line, # comments")
 
 
 def run(args) -> int:
-    from ..io.tum import read_tum
-    from ._from_poses import run_from_poses
+    from ._common import options_from_args, run_synthesis
 
-    return run_from_poses(args, read_tum)
+    return run_synthesis(options_from_args(args, "tum"))

@@ -6,12 +6,15 @@ NAME = "run"
 ORDER = 15
 HELP = "run a scene file (YAML: motion source, spline, IMU rate and sensor model, outputs, seed)"
 DESCRIPTION = """\
-Run a scene file. See splineimu/scenefile.py (or examples/*.yaml) for the format:
+Run a scene file. See splineimu/api/scenefile.py (or examples/*.yaml) for the format:
 
   motion: {scene: ellipse, duration_s: 60}     or   motion: {poses: mocap.tum, spline: {order: 6}}
   imu:    {rate_hz: 200, model: adis16448}
   seed:   42
   output: {dir: out, plot: true}
+
+The file and the command line build the same job: --print shows the command that gives the
+same output bytes.
 
 examples:
   splineimu run examples/ellipse_scene.yaml
@@ -26,14 +29,16 @@ def add_arguments(p):
 
 
 def run(args) -> int:
+    import dataclasses
     import shlex
-    import tempfile
-    from pathlib import Path
 
-    from ..scenefile import run_scene_file, scene_to_argv
+    from ..api.scenefile import load_scene_file
+    from ._common import echo, run_synthesis
 
+    job = load_scene_file(args.scene_file)
+    if args.force:
+        job.output = dataclasses.replace(job.output, force=True)
     if args.print:
-        with tempfile.TemporaryDirectory() as tmp:
-            print("splineimu " + " ".join(shlex.quote(a) for a in scene_to_argv(args.scene_file, Path(tmp))))
+        echo("splineimu " + shlex.join(job.to_argv()))
         return 0
-    return run_scene_file(args.scene_file, ["--force"] if args.force else [])
+    return run_synthesis(job)

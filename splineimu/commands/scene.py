@@ -23,7 +23,7 @@ def add_arguments(p):
     p.add_argument("name", nargs="?", help="scene name (see --list)")
     p.add_argument("--list", action="store_true", help="list the scenes with their parameters and exit")
     p.add_argument("--duration", type=float, metavar="S", help="duration [s] (default: the scene's own)")
-    p.add_argument("--t0-ns", type=int, default=0, metavar="NS", help="absolute time of the scene start [ns]")
+    p.add_argument("--t0-ns", type=int, metavar="NS", help="absolute time of the scene start [ns]")
     p.add_argument("--param", action="append", default=[], metavar="KEY=VALUE",
                    help="scene parameter, e.g. --param radius_m=3 (repeatable; vectors as 1,2,3)")
     p.add_argument("--tum", metavar="FILE", help="write the scene's poses at --rate to this TUM file")
@@ -31,53 +31,22 @@ def add_arguments(p):
     add_output_args(p)
 
 
-def _parse_params(items):
-    from ..errors import ConfigError
-
-    params = {}
-    for it in items:
-        if "=" not in it:
-            raise ConfigError(f"--param expects KEY=VALUE, got {it!r}")
-        k, v = it.split("=", 1)
-        params[k.strip()] = v.strip()
-    return params
-
-
 def run(args) -> int:
-    import time
-
-    from .. import scenes
     from ..errors import ConfigError
-    from ..pipeline import synthesize_stream, uniform_stamps_ns, write_output
-    from ._common import fail_fast_output, load_extrinsic, say, seed_or_default, summary
+    from ._common import echo, options_from_args, run_synthesis
 
     if args.list:
+        from .. import scenes
+
         for name in scenes.scene_names():
             cls = scenes.SCENES[name]
             doc = (cls.__doc__ or "").strip().splitlines()[0] if cls.__doc__ else ""
-            say(f"{name:14s} {doc}")
+            echo(f"{name:14s} {doc}")
             for pname, prm in getattr(cls, "PARAMS", {}).items():
-                say(f"    {pname:24s} default {prm.default!r} [{prm.unit}]")
+                echo(f"    {pname:24s} default {prm.default!r} [{prm.unit}]")
         return 0
     if not args.name:
         raise ConfigError("give a scene name (or --list)")
     if not args.out and not args.tum:
         raise ConfigError("nothing to write: give -o OUT and/or --tum FILE")
-    t0 = time.perf_counter()
-    fail_fast_output(args)
-    scene = scenes.make_scene(args.name, duration_s=args.duration, t0_ns=args.t0_ns, **_parse_params(args.param))
-    if args.tum:
-        scenes.write_scene_tum(scene, args.tum, args.rate)
-        say(f"poses         {args.tum} ({args.rate:g} Hz)")
-    if not args.out:
-        return 0
-    t_ns = uniform_stamps_ns(scene.origin_ns, scene.origin_ns + int(round(scene.t_max_s * 1e9)), args.rate)
-    seed = seed_or_default(args.seed) if args.imu else args.seed
-    syn = synthesize_stream(scene, t_ns, gravity=tuple(args.gravity), extrinsic=load_extrinsic(args.extrinsic),
-                            imu_config=args.imu, seed=seed, sampling=args.sampling,
-                            with_increments=args.increments)
-    report = {"source": {"kind": "analytic scene", **scene.describe()}, "rate_hz": args.rate}
-    rep = write_output(syn, args.out, force=args.force, report=report, bag=args.bag, plot=args.plot)
-    say(f"scene         {args.name}, {scene.t_max_s:g} s")
-    summary(rep, args.out, t0)
-    return 0
+    return run_synthesis(options_from_args(args, "scene"))

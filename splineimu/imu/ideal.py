@@ -50,10 +50,8 @@ class Extrinsic:
 
     @property
     def matrix(self) -> np.ndarray:
-        T = np.eye(4)
-        T[:3, :3] = self.body_R_sensor
-        T[:3, 3] = self.body_t_sensor
-        return T
+        """``body_T_sensor`` as a (4, 4) homogeneous matrix."""
+        return np.block([[self.body_R_sensor, self.body_t_sensor[:, None]], [np.zeros((1, 3)), np.ones((1, 1))]])
 
     @classmethod
     def from_matrix(cls, T) -> Extrinsic:
@@ -67,28 +65,37 @@ class Extrinsic:
         return cls(T[:3, :3], T[:3, 3])
 
     @classmethod
-    def from_file(cls, path) -> Extrinsic:
-        """Read ``T_bs`` from a YAML file.
+    def from_dict(cls, d, where=None) -> Extrinsic:
+        """``body_T_sensor`` from a mapping (an extrinsic file's content, or a scene file's value).
 
         Accepted forms: a 4x4 matrix under ``T_BS`` (EuRoC sensor.yaml, ``{rows, cols, data}``
         or nested lists), ``T_bs``, ``body_T_sensor``, or Kalibr's ``T_i_b`` (IMU from body, which
-        is inverted); or ``translation: [x, y, z]`` with ``quat_xyzw: [x, y, z, w]``.
-        """
-        import yaml
+        is inverted); or ``translation: [x, y, z]`` with ``quat_xyzw: [x, y, z, w]``. A mapping
+        with one entry holding such a mapping (``{cam0: {T_BS: ...}}``) is unwrapped.
 
-        try:
-            with open(path) as fh:
-                doc = yaml.safe_load(fh)
-        except OSError as exc:
-            raise ConfigError(f"cannot read extrinsic file {path}: {exc.strerror}") from None
-        except yaml.YAMLError as exc:
-            raise ConfigError(f"{path}: not valid YAML ({exc.__class__.__name__})") from None
-        if isinstance(doc, dict) and len(doc) == 1 and isinstance(next(iter(doc.values())), dict):
-            inner = next(iter(doc.values()))
+        Parameters
+        ----------
+        d : dict
+        where : (path, line) or path, optional
+            Where the mapping came from, for error messages.
+
+        Raises
+        ------
+        ConfigError
+            No known key, a matrix that is not a rigid transform, or bad numbers.
+
+        Examples
+        --------
+        >>> Extrinsic.from_dict({"translation": [0.1, 0, 0], "quat_xyzw": [0, 0, 0, 1]}).body_t_sensor.tolist()
+        [0.1, 0.0, 0.0]
+        """
+        path, line = where if isinstance(where, tuple) else (where, None)
+        if isinstance(d, dict) and len(d) == 1 and isinstance(next(iter(d.values())), dict):
+            inner = next(iter(d.values()))
             if any(k in inner for k in ("T_BS", "T_bs", "T_i_b", "body_T_sensor")):
-                doc = inner
-        if not isinstance(doc, dict):
-            raise ConfigError(f"{path}: expected a mapping with T_BS / T_bs / translation+quat_xyzw")
+                d = inner
+        if not isinstance(d, dict):
+            raise ConfigError("expected a mapping with T_BS / T_bs / translation+quat_xyzw", path=path, line=line)
 
         def mat(v):
             if isinstance(v, dict) and "data" in v:
@@ -97,18 +104,28 @@ class Extrinsic:
 
         try:
             for key in ("T_BS", "T_bs", "body_T_sensor"):
-                if key in doc:
-                    return cls.from_matrix(mat(doc[key]))
-            if "T_i_b" in doc:
-                return cls.from_matrix(np.linalg.inv(mat(doc["T_i_b"])))
-            if "translation" in doc or "quat_xyzw" in doc:
+                if key in d:
+                    return cls.from_matrix(mat(d[key]))
+            if "T_i_b" in d:
+                return cls.from_matrix(np.linalg.inv(mat(d["T_i_b"])))
+            if "translation" in d or "quat_xyzw" in d:
                 from ..lie import quat_xyzw_to_matrix
 
-                q = doc.get("quat_xyzw", [0, 0, 0, 1])
-                return cls(quat_xyzw_to_matrix(np.asarray(q, dtype=np.float64)), doc.get("translation", [0, 0, 0]))
+                q = d.get("quat_xyzw", [0, 0, 0, 1])
+                return cls(quat_xyzw_to_matrix(np.asarray(q, dtype=np.float64)), d.get("translation", [0, 0, 0]))
+        except ConfigError as exc:
+            raise ConfigError(exc.problem, path=path, line=line) from None
         except (TypeError, ValueError) as exc:
-            raise ConfigError(f"{path}: bad extrinsic ({exc})") from None
-        raise ConfigError(f"{path}: no T_BS, T_bs, body_T_sensor, T_i_b or translation/quat_xyzw key")
+            raise ConfigError(f"bad extrinsic ({exc})", path=path, line=line) from None
+        raise ConfigError("no T_BS, T_bs, body_T_sensor, T_i_b or translation/quat_xyzw key", path=path, line=line)
+
+    @classmethod
+    def from_file(cls, path) -> Extrinsic:
+        """Read ``body_T_sensor`` from a YAML file (the forms of :meth:`from_dict`)."""
+        from ..io.yaml import read_yaml
+
+        doc = read_yaml(path, "extrinsic file")
+        return cls.from_dict(doc.data, where=doc.name)
 
 
 @dataclass

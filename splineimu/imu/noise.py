@@ -56,6 +56,7 @@ import numpy as np
 
 from .._kernels import noise as _k
 from ..errors import ConfigError, InputError
+from ..validation import as_float_array, as_seed, as_times_s, as_vectors
 from .config import SENSORS, ImuConfig, load_imu_config
 
 __all__ = ["SensorModel", "SensorStream", "ImuMeasurement", "NOISE_PROCESSES", "DEFAULT_TEMPERATURE_REFERENCE_C"]
@@ -137,9 +138,7 @@ class _Streams:
         elif rng is None:
             ss = np.random.SeedSequence()
         elif isinstance(rng, (int, np.integer)) and not isinstance(rng, bool):
-            if rng < 0:
-                raise ConfigError(f"seed must be a non-negative integer, got {rng}")
-            ss = np.random.SeedSequence(int(rng))
+            ss = np.random.SeedSequence(as_seed(int(rng), "rng"))
         else:
             raise ConfigError(f"`rng` must be None, an int seed, a SeedSequence or a Generator, got {rng!r}")
         self._ss = ss
@@ -156,15 +155,6 @@ class _Streams:
                                            pool_size=ss.pool_size)
             g = self._gens[i] = np.random.Generator(np.random.PCG64(child))
         return g
-
-
-def _as_samples(x, n, name):
-    a = np.asarray(x, dtype=np.float64)
-    if a.shape != (n, 3):
-        raise InputError(f"Expected `{name}` to have shape ({n}, 3), got {a.shape}")
-    if not np.all(np.isfinite(a)):
-        raise InputError(f"`{name}` contains NaN or infinite values")
-    return np.ascontiguousarray(a)
 
 
 class SensorModel:
@@ -215,15 +205,9 @@ class SensorModel:
     def _temperature(self, t, temperature_c, t_first=None):
         cfg = self.config
         if temperature_c is not None:
-            T = np.asarray(temperature_c, dtype=np.float64)
-            if T.ndim == 0:
-                T = np.full(t.shape, float(T))
-            if T.shape != t.shape:
-                raise InputError(f"Expected `temperature_c` to be a number or have shape {t.shape}, "
-                                 f"got {T.shape}")
-            if not np.all(np.isfinite(T)):
-                raise InputError("`temperature_c` contains NaN or infinite values")
-            return T
+            if np.ndim(temperature_c) == 0:
+                temperature_c = np.full(t.shape, as_float_array(temperature_c, "temperature_c")[0])
+            return as_float_array(temperature_c, "temperature_c", t.shape)
         if cfg.temperature_profile is not None:
             return cfg.temperature_profile(t, t_first)
         return None
@@ -383,12 +367,15 @@ class SensorModel:
         return meas, bias
 
 
+def _as_samples(x, n, name):
+    """(kept for splineimu.calibration, which imports it: use validation.as_vectors)"""
+    return as_vectors(x, name, n)
+
+
 def _as_times(t_s):
-    t = np.asarray(t_s, dtype=np.float64)
-    if t.ndim != 1 or t.size == 0:
-        raise InputError(f"Expected `t_s` to have shape (N,) with N >= 1, got {t.shape}")
-    if not np.all(np.isfinite(t)):
-        raise InputError("`t_s` contains NaN or infinite values")
+    t = as_times_s(t_s)
+    if t.size == 0:
+        raise InputError("Expected `t_s` to have shape (N,) with N >= 1, got (0,)")
     return t
 
 
@@ -419,8 +406,8 @@ class SensorStream:
         (``t_s`` must continue after the previous piece)."""
         t = _as_times(t_s)
         n = t.size
-        g = _as_samples(gyro, n, "gyro")
-        a = _as_samples(accel, n, "accel")
+        g = as_vectors(gyro, "gyro", n)
+        a = as_vectors(accel, "accel", n)
         first = self._prev_t is None
         dt = np.diff(t) if first else np.diff(t, prepend=self._prev_t)
         if np.any(dt <= 0):

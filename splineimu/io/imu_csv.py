@@ -1,7 +1,8 @@
 """Readers of recorded IMU data: EuRoC ``imu0/data.csv`` and the static ADIS16405 ``.rda`` file.
 
 Both return ``(t_ns, gyro_rad_s, accel_m_s2)``: int64 nanoseconds (N,), and (N, 3) float64
-arrays in rad/s and m/s^2.
+arrays in rad/s and m/s^2. :func:`load_recording` reads either into an :class:`ImuRecording`
+(six columns, the sample rate and notes) for noise analysis.
 
 EuRoC csv
 ---------
@@ -29,13 +30,16 @@ import io
 import math
 import os
 import warnings
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import ConfigError, InputError
+from ..validation import as_rate_hz
 
-__all__ = ["read_imu_csv", "read_imu_table", "read_static_rda", "GYRO_UNITS", "ACCEL_UNITS", "STANDARD_GRAVITY"]
+__all__ = ["read_imu_csv", "read_imu_table", "read_static_rda", "load_recording", "ImuRecording",
+           "GYRO_UNITS", "ACCEL_UNITS", "STANDARD_GRAVITY", "RECORDING_FORMATS"]
 
 #: Standard gravity [m/s^2] used to convert "g" (ISO 80000-3).
 STANDARD_GRAVITY = 9.80665
@@ -304,3 +308,110 @@ def read_static_rda(path, rate_hz: float = 100.0, gyro_unit: str = "deg/s", acce
     gyro = np.ascontiguousarray(arr[:, :3] * gf)
     accel = np.ascontiguousarray(arr[:, 3:] * af)
     return t_ns, gyro, accel
+
+
+#: Formats :func:`load_recording` reads.
+RECORDING_FORMATS = ("euroc", "rda")
+
+
+@dataclass
+class ImuRecording:
+    """Six-axis IMU samples read for analysis.
+
+    Attributes
+    ----------
+    values : (N, 6) float64
+        Gyro [rad/s] in columns 0-2, accelerometer [m/s^2] in columns 3-5.
+    rate_hz : float
+        Sample rate (given, or from the median stamp interval).
+    path : pathlib.Path
+    format : {"euroc", "rda"}
+    notes : list of str
+        What was assumed or found (an assumed rate, gaps in the stamps).
+    """
+
+    values: np.ndarray
+    rate_hz: float
+    path: Path
+    format: str
+    notes: list = field(default_factory=list)
+
+    @property
+    def gyro_rad_s(self) -> np.ndarray:
+        """(N, 3) view of the gyro columns."""
+        return self.values[:, :3]
+
+    @property
+    def accel_m_s2(self) -> np.ndarray:
+        """(N, 3) view of the accelerometer columns."""
+        return self.values[:, 3:]
+
+
+def load_recording(path, fmt=None, rate_hz=None, gyro_unit=None, accel_unit=None) -> ImuRecording:
+    """Read an EuRoC IMU csv or an ``.rda`` matrix for noise analysis.
+
+    Parameters
+    ----------
+    path : path-like
+    fmt : {"euroc", "rda"}, optional
+        Default: ``"rda"`` for ``.rda`` / ``.rdata`` files, else ``"euroc"``.
+    rate_hz : float, optional
+        Sample rate; default the csv stamps' median interval, 100 Hz for ``.rda`` (no stamps).
+    gyro_unit : {"rad/s", "deg/s", "deg/h"}, optional
+        Unit of the gyro columns (default rad/s for csv, deg/s for rda).
+    accel_unit : {"m/s^2", "g", "mg"}, optional
+        Unit of the accelerometer columns (default m/s^2 for csv, g for rda).
+
+    Returns
+    -------
+    ImuRecording
+        Values in SI units.
+
+    Raises
+    ------
+    InputError
+        Unreadable file, fewer than 3 samples, unknown unit.
+    ConfigError
+        Bad rate or format.
+
+    Examples
+    --------
+    >>> import tempfile, os
+    >>> p = os.path.join(tempfile.mkdtemp(), "imu.csv")
+    >>> rows = "".join(f"{i * 5000000},0,0,1,0,0,9.81\\n" for i in range(4))
+    >>> _ = open(p, "w").write("#timestamp [ns],wx,wy,wz,ax,ay,az\\n" + rows)
+    >>> rec = load_recording(p, gyro_unit="deg/s")
+    >>> rec.rate_hz, round(float(rec.gyro_rad_s[0, 2]), 6), rec.notes
+    (200.0, 0.017453, [])
+    """
+    path = Path(path)
+    if fmt is None:
+        fmt = "rda" if path.suffix.lower() in (".rda", ".rdata") else "euroc"
+    if fmt not in RECORDING_FORMATS:
+        raise ConfigError(f"unknown recording format {fmt!r}; expected one of {', '.join(RECORDING_FORMATS)}",
+                          option="format")
+    notes = []
+    if rate_hz is not None:
+        rate_hz = as_rate_hz(rate_hz)
+    if fmt == "rda":
+        rate = 100.0 if rate_hz is None else rate_hz
+        _, gyro, accel = read_static_rda(path, rate_hz=rate, gyro_unit=gyro_unit or "deg/s",
+                                         accel_unit=accel_unit or "g")
+        notes.append(f"no stamps in an .rda file: {rate:g} Hz assumed; units gyro {gyro_unit or 'deg/s'}, "
+                     f"accel {accel_unit or 'g'}")
+        return ImuRecording(np.hstack([gyro, accel]), rate, path, fmt, notes)
+    t_ns, data = read_imu_table(path)
+    if gyro_unit:
+        data[:, :3] *= unit_factor(gyro_unit, GYRO_UNITS, "gyro")
+    if accel_unit:
+        data[:, 3:] *= unit_factor(accel_unit, ACCEL_UNITS, "accelerometer")
+    if t_ns.size < 3:
+        raise InputError(f"need at least 3 samples for an Allan deviation, got {t_ns.size}", path)
+    d = np.diff(t_ns)
+    med = float(np.median(d))
+    rate = 1e9 / med if rate_hz is None else rate_hz
+    gaps = int(np.count_nonzero(d > 1.5 * med))
+    if gaps:
+        notes.append(f"{gaps} gap(s) longer than 1.5 sample intervals (longest {d.max() / 1e9:.3g} s): "
+                     "the Allan deviation assumes even sampling")
+    return ImuRecording(data, rate, path, fmt, notes)

@@ -144,19 +144,16 @@ Visual-Inertial Odometry", IEEE T-RO 33(1), 2017.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-
 import numpy as np
 
-from ._kernels import preintegration as _k
-from .errors import ConfigError, InputError, SplineImuError
-from .lie import matrix_to_quat_xyzw, quat_xyzw_to_matrix, so3_exp, so3_log
-from .motion import DEFAULT_GRAVITY
+from .._kernels import preintegration as _k
+from ..errors import ConfigError, InputError, SplineImuError
+from ..lie import matrix_to_quat_xyzw, quat_xyzw_to_matrix, so3_exp
+from ..motion import DEFAULT_GRAVITY
+from ..validation import as_quat_xyzw, as_times_s, as_vector, as_vectors, finite_float, one_of
+from .deltas import Deltas
 
-__all__ = [
-    "Preintegrator", "Deltas", "ExactDeltas", "exact_deltas", "delta_error", "nees",
-    "METHODS", "COVARIANCE_MODELS", "STATE_ORDER", "WindowResult", "evaluate_windows",
-]
+__all__ = ["Preintegrator", "METHODS", "COVARIANCE_MODELS", "STATE_ORDER"]
 
 METHODS = ("midpoint", "euler")
 COVARIANCE_MODELS = ("consistent", "vins")
@@ -166,193 +163,23 @@ STATE_ORDER = ("p", "theta", "v", "b_a", "b_g")
 O_P, O_R, O_V, O_BA, O_BG = 0, 3, 6, 9, 12
 
 
-# ----------------------------------------------------------------------------- helpers
-
-
-def _density(x, name):
-    a = np.asarray(x, dtype=np.float64)
-    if a.shape == ():
-        a = np.full(3, float(a))
-    if a.shape != (3,):
-        raise ConfigError(f"Expected `{name}` to be a scalar or have shape (3,), got {np.shape(x)}")
-    if not np.all(np.isfinite(a)) or np.any(a < 0):
-        raise ConfigError(f"`{name}` must be finite and >= 0, got {x!r}")
+def _noise_density(value, name) -> np.ndarray:
+    """A density given as one number or per axis, as a (3,) array >= 0."""
+    a = as_vector(np.full(3, finite_float(value, name)) if np.ndim(value) == 0 else value, name)
+    if np.any(a < 0):
+        raise ConfigError(f"`{name}` must be zero or positive, got {value!r}", option=name)
     return a
 
 
-def _vec3(x, name):
-    a = np.asarray(x, dtype=np.float64)
-    if a.shape != (3,):
-        raise InputError(f"Expected `{name}` to have shape (3,), got {a.shape}")
-    if not np.all(np.isfinite(a)):
-        raise InputError(f"`{name}` contains NaN or inf")
-    return np.ascontiguousarray(a)
+def _rotation(quat_xyzw, name) -> np.ndarray:
+    """(3, 3) rotation of one quaternion argument (checked: shape (4,), finite, non-zero)."""
+    q = as_quat_xyzw(np.reshape(as_vector(quat_xyzw, name, 4), (1, 4)), name)
+    return quat_xyzw_to_matrix(q[0])
 
 
-def _quat(x, name):
-    q = np.asarray(x, dtype=np.float64)
-    if q.shape != (4,):
-        raise InputError(f"Expected `{name}` to have shape (4,), got {q.shape}")
-    n = float(np.linalg.norm(q))
-    if not np.isfinite(n) or n < 1e-12:
-        raise InputError(f"`{name}` is not a valid quaternion (norm {n:g})")
-    return q / n
-
-
-def _quat_mul_xyzw(a, b):
-    ax, ay, az, aw = a
-    bx, by, bz, bw = b
-    return np.array([
-        aw * bx + ax * bw + ay * bz - az * by,
-        aw * by - ax * bz + ay * bw + az * bx,
-        aw * bz + ax * by - ay * bx + az * bw,
-        aw * bw - ax * bx - ay * by - az * bz,
-    ])
-
-
-def _quat_inv_xyzw(q):
-    return np.array([-q[0], -q[1], -q[2], q[3]])
-
-
-@dataclass
-class Deltas:
-    """Preintegrated quantities between two instants, in the body frame of the first.
-
-    Attributes
-    ----------
-    delta_p : (3,) ``R_i^T (p_j - p_i - v_i dt - g dt^2 / 2)`` [m]
-    delta_v : (3,) ``R_i^T (v_j - v_i - g dt)`` [m/s]
-    delta_q_xyzw : (4,) ``q_i^{-1} q_j`` (Hamilton, ``w >= 0``)
-    delta_t_s : float, ``t_j - t_i`` [s]
-    """
-
-    delta_p: np.ndarray
-    delta_v: np.ndarray
-    delta_q_xyzw: np.ndarray
-    delta_t_s: float
-
-    @property
-    def delta_R(self) -> np.ndarray:
-        """(3, 3) rotation matrix of :attr:`delta_q_xyzw`."""
-        return quat_xyzw_to_matrix(self.delta_q_xyzw)
-
-
-@dataclass
-class ExactDeltas(Deltas):
-    """:class:`Deltas` computed from a motion source, with the states at both ends.
-
-    Extra attributes
-    ----------------
-    t_i_s, t_j_s : float
-    position_i, velocity_i, position_j, velocity_j : (3,) world frame
-    quat_i_xyzw, quat_j_xyzw : (4,) ``world_R_body``
-    relative_position : (3,) ``R_i^T (p_j - p_i)``, the body-frame displacement [m]
-    """
-
-    t_i_s: float = 0.0
-    t_j_s: float = 0.0
-    position_i: np.ndarray = field(default_factory=lambda: np.zeros(3))
-    quat_i_xyzw: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, 0.0, 1.0]))
-    velocity_i: np.ndarray = field(default_factory=lambda: np.zeros(3))
-    position_j: np.ndarray = field(default_factory=lambda: np.zeros(3))
-    quat_j_xyzw: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, 0.0, 1.0]))
-    velocity_j: np.ndarray = field(default_factory=lambda: np.zeros(3))
-    relative_position: np.ndarray = field(default_factory=lambda: np.zeros(3))
-
-
-def _deltas_from_states(p_i, R_i, v_i, p_j, R_j, v_j, dt, gravity):
-    g = np.asarray(gravity, dtype=np.float64)
-    dR = R_i.T @ R_j
-    dp = R_i.T @ (p_j - p_i - v_i * dt - 0.5 * g * dt * dt)
-    dv = R_i.T @ (v_j - v_i - g * dt)
-    return dp, dv, matrix_to_quat_xyzw(dR)
-
-
-def exact_deltas(source, t_i_s, t_j_s, gravity=DEFAULT_GRAVITY) -> ExactDeltas:
-    """Exact, bias-free preintegrated quantities of a motion source between two times.
-
-    Parameters
-    ----------
-    source : splineimu.motion.MotionSource
-        A fitted spline or an analytic scene.
-    t_i_s, t_j_s : float
-        Start and end, seconds in the source's time base.
-    gravity : (3,) array_like, default (0, 0, -9.81)
-        World gravity ``g_w``; must be the value the IMU samples were made with.
-
-    Returns
-    -------
-    ExactDeltas
-        ``delta_q = q_i^{-1} q_j``, ``delta_v = R_i^T (v_j - v_i - g dt)``,
-        ``delta_p = R_i^T (p_j - p_i - v_i dt - g dt^2 / 2)``, plus both states.
-
-    Raises
-    ------
-    RangeError
-        A time outside the source's valid range.
-
-    Notes
-    -----
-    These are what a preintegrator fed with the source's ideal IMU
-    (``source.imu(t, gravity)``) converges to as the sample interval goes to zero.
-
-    Examples
-    --------
-    >>> from splineimu.scenes import make_scene
-    >>> d = exact_deltas(make_scene("static"), 0.0, 1.0)
-    >>> d.delta_v.round(12) + 0.0, d.delta_p.round(12) + 0.0
-    (array([0.  , 0.  , 9.81]), array([0.   , 0.   , 4.905]))
-    """
-    t = source.check_times([t_i_s, t_j_s], "t_i_s, t_j_s")
-    kin = source.kinematics(t)
-    dt = float(t[1] - t[0])
-    R_i, R_j = kin.world_R_body[0], kin.world_R_body[1]
-    p_i, p_j = kin.position_world[0], kin.position_world[1]
-    v_i, v_j = kin.velocity_world[0], kin.velocity_world[1]
-    dp, dv, dq = _deltas_from_states(p_i, R_i, v_i, p_j, R_j, v_j, dt, gravity)
-    q = matrix_to_quat_xyzw(kin.world_R_body)
-    return ExactDeltas(
-        delta_p=dp, delta_v=dv, delta_q_xyzw=dq, delta_t_s=dt,
-        t_i_s=float(t[0]), t_j_s=float(t[1]),
-        position_i=p_i.copy(), quat_i_xyzw=q[0], velocity_i=v_i.copy(),
-        position_j=p_j.copy(), quat_j_xyzw=q[1], velocity_j=v_j.copy(),
-        relative_position=R_i.T @ (p_j - p_i),
-    )
-
-
-def delta_error(estimate, truth) -> np.ndarray:
-    """``truth (-) estimate`` of two :class:`Deltas` as a (9,) vector ``(dp, dtheta, dv)``.
-
-    ``dtheta = Log(Delta R_est^T Delta R_true)`` (right perturbation), the sense and order of
-    the first nine rows of :meth:`Preintegrator.residual` and :attr:`Preintegrator.covariance`.
-    """
-    e = np.empty(9)
-    e[0:3] = np.asarray(truth.delta_p) - np.asarray(estimate.delta_p)
-    e[3:6] = so3_log(estimate.delta_R.T @ truth.delta_R)
-    e[6:9] = np.asarray(truth.delta_v) - np.asarray(estimate.delta_v)
-    return e
-
-
-def nees(error, covariance) -> float:
-    """Normalized estimation error squared ``e^T C^{-1} e`` (via a Cholesky solve).
-
-    Raises
-    ------
-    SplineImuError
-        ``covariance`` is not positive definite (e.g. the 9x9 block of a one-step window, where
-        p and v are driven by the same noise).
-    """
-    e = np.asarray(error, dtype=np.float64)
-    C = np.asarray(covariance, dtype=np.float64)
-    try:
-        L = np.linalg.cholesky(C)
-    except np.linalg.LinAlgError:
-        raise SplineImuError("the covariance is not positive definite: no NEES") from None
-    z = np.linalg.solve(L, e)
-    return float(z @ z)
-
-
-# ----------------------------------------------------------------------------- class
+def _part(array_name: str, lo: int, hi: int, doc: str) -> property:
+    """A read-only property returning a copy of ``self.<array_name>[lo:hi]``."""
+    return property(lambda self: getattr(self, array_name)[lo:hi].copy(), doc=doc)
 
 
 class Preintegrator:
@@ -412,22 +239,15 @@ class Preintegrator:
     def __init__(self, gyro_noise_density, accel_noise_density, gyro_random_walk, accel_random_walk,
                  bias_gyro=(0.0, 0.0, 0.0), bias_accel=(0.0, 0.0, 0.0), method: str = "midpoint",
                  covariance: str = "consistent", compute_covariance: bool = True):
-        if method not in METHODS:
-            raise ConfigError(f"Expected `method` to be one of {METHODS}, got {method!r}")
-        if covariance not in COVARIANCE_MODELS:
-            raise ConfigError(f"Expected `covariance` to be one of {COVARIANCE_MODELS}, got {covariance!r}")
-        self.method = method
-        self.covariance_model = covariance
+        self.method = one_of(method, "method", METHODS)
+        self.covariance_model = one_of(covariance, "covariance", COVARIANCE_MODELS)
         self.compute_covariance = bool(compute_covariance)
-        self.gyro_noise_density = _density(gyro_noise_density, "gyro_noise_density")
-        self.accel_noise_density = _density(accel_noise_density, "accel_noise_density")
-        self.gyro_random_walk = _density(gyro_random_walk, "gyro_random_walk")
-        self.accel_random_walk = _density(accel_random_walk, "accel_random_walk")
-        try:
-            bg = _vec3(bias_gyro, "bias_gyro")
-            ba = _vec3(bias_accel, "bias_accel")
-        except InputError as e:
-            raise ConfigError(str(e)) from None
+        self.gyro_noise_density = _noise_density(gyro_noise_density, "gyro_noise_density")
+        self.accel_noise_density = _noise_density(accel_noise_density, "accel_noise_density")
+        self.gyro_random_walk = _noise_density(gyro_random_walk, "gyro_random_walk")
+        self.accel_random_walk = _noise_density(accel_random_walk, "accel_random_walk")
+        bg = as_vector(bias_gyro, "bias_gyro")
+        ba = as_vector(bias_accel, "bias_accel")
         self._chunks: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
         self._reset(bg, ba)
 
@@ -450,25 +270,14 @@ class Preintegrator:
         self._sum_dt = np.zeros(1)
         self._n = 0
 
-    @property
-    def bias_gyro(self) -> np.ndarray:
-        return self._params[0:3].copy()
-
-    @property
-    def bias_accel(self) -> np.ndarray:
-        return self._params[3:6].copy()
+    bias_gyro = _part("_params", 0, 3, "(3,) gyro bias linearization point [rad/s].")
+    bias_accel = _part("_params", 3, 6, "(3,) accelerometer bias linearization point [m/s^2].")
+    delta_p = _part("_nav", 0, 3, "(3,) preintegrated position delta [m].")
+    delta_v = _part("_nav", 3, 6, "(3,) preintegrated velocity delta [m/s].")
 
     @property
     def n_samples(self) -> int:
         return self._n
-
-    @property
-    def delta_p(self) -> np.ndarray:
-        return self._nav[0:3].copy()
-
-    @property
-    def delta_v(self) -> np.ndarray:
-        return self._nav[3:6].copy()
 
     @property
     def delta_q_xyzw(self) -> np.ndarray:
@@ -538,29 +347,16 @@ class Preintegrator:
         InputError
             Wrong shapes, non-finite values or non-increasing times.
         """
-        t = np.ascontiguousarray(np.atleast_1d(np.asarray(t_s, dtype=np.float64)))
-        if t.ndim != 1:
-            raise InputError(f"Expected `t_s` to have shape (N,), got {np.shape(t_s)}")
+        t = as_times_s(np.atleast_1d(t_s), "t_s", increasing=True)
         n = t.shape[0]
-        g = np.asarray(gyro, dtype=np.float64)
-        a = np.asarray(accel, dtype=np.float64)
-        for arr, name in ((g, "gyro"), (a, "accel")):
-            if arr.shape != (n, 3) and not (n == 0 and arr.size == 0):
-                raise InputError(f"Expected `{name}` to have shape ({n}, 3), got {arr.shape}")
-        if n == 0:
+        if n == 0 and np.size(gyro) == 0 and np.size(accel) == 0:
             return self
-        if not (np.all(np.isfinite(t)) and np.all(np.isfinite(g)) and np.all(np.isfinite(a))):
-            raise InputError("`t_s`, `gyro` and `accel` must be finite")
-        d = np.diff(t)
-        if np.any(d <= 0):
-            i = int(np.flatnonzero(d <= 0)[0])
-            raise InputError(f"`t_s` must be strictly increasing: t_s[{i + 1}] = {t[i + 1]!r} <= {t[i]!r}")
+        g = as_vectors(gyro, "gyro", n)
+        a = as_vectors(accel, "accel", n)
         if self._n and t[0] <= self._prev[0]:
             raise InputError(
                 f"`t_s[0]` = {t[0]!r} must come after the last sample integrated ({self._prev[0]!r})"
             )
-        g = np.ascontiguousarray(g)
-        a = np.ascontiguousarray(a)
         self._run(t, g, a)
         self._chunks.append((t.copy(), g.copy(), a.copy()))
         return self
@@ -593,9 +389,7 @@ class Preintegrator:
         Preintegrator
             ``self``.
         """
-        bg = _vec3(bias_gyro, "bias_gyro")
-        ba = _vec3(bias_accel, "bias_accel")
-        self._reset(bg, ba)
+        self._reset(as_vector(bias_gyro, "bias_gyro"), as_vector(bias_accel, "bias_accel"))
         if self._chunks:
             t, g, a = self.samples()
             self._chunks = [(t, g, a)]
@@ -626,8 +420,8 @@ class Preintegrator:
             ``Delta p + J_{p,b_a} d b_a + J_{p,b_g} d b_g``, likewise ``v``, and
             ``Delta q Exp(J_{theta,b_g} d b_g)`` with ``d b = b - b_lin``.
         """
-        dbg = _vec3(bias_gyro, "bias_gyro") - self._params[0:3]
-        dba = _vec3(bias_accel, "bias_accel") - self._params[3:6]
+        dbg = as_vector(bias_gyro, "bias_gyro") - self._params[0:3]
+        dba = as_vector(bias_accel, "bias_accel") - self._params[3:6]
         Jm = self.jacobian
         dp = self.delta_p + Jm[O_P:O_P + 3, O_BA:O_BA + 3] @ dba + Jm[O_P:O_P + 3, O_BG:O_BG + 3] @ dbg
         dv = self.delta_v + Jm[O_V:O_V + 3, O_BA:O_BA + 3] @ dba + Jm[O_V:O_V + 3, O_BG:O_BG + 3] @ dbg
@@ -656,25 +450,17 @@ class Preintegrator:
             by :meth:`corrected`. Order (p, theta, v, b_a, b_g), covariance
             :attr:`covariance`.
         """
-        p_i = _vec3(p_i, "p_i")
-        v_i = _vec3(v_i, "v_i")
-        p_j = _vec3(p_j, "p_j")
-        v_j = _vec3(v_j, "v_j")
-        qi = _quat(q_i_xyzw, "q_i_xyzw")
-        qj = _quat(q_j_xyzw, "q_j_xyzw")
-        ba_i = _vec3(ba_i, "ba_i")
-        bg_i = _vec3(bg_i, "bg_i")
-        ba_j = _vec3(ba_j, "ba_j")
-        bg_j = _vec3(bg_j, "bg_j")
-        g = _vec3(gravity, "gravity")
+        p_i, v_i, p_j, v_j, ba_i, bg_i, ba_j, bg_j, g = (
+            as_vector(x, name) for x, name in ((p_i, "p_i"), (v_i, "v_i"), (p_j, "p_j"), (v_j, "v_j"),
+                                               (ba_i, "ba_i"), (bg_i, "bg_i"), (ba_j, "ba_j"), (bg_j, "bg_j"),
+                                               (gravity, "gravity")))
+        R_i = _rotation(q_i_xyzw, "q_i_xyzw")
+        R_j = _rotation(q_j_xyzw, "q_j_xyzw")
         c = self.corrected(bg_i, ba_i)
         dt = self.delta_t_s
-        R_i = quat_xyzw_to_matrix(qi)
         r = np.empty(15)
         r[O_P:O_P + 3] = R_i.T @ (p_j - p_i - v_i * dt - 0.5 * g * dt * dt) - c.delta_p
-        qe = _quat_mul_xyzw(_quat_inv_xyzw(c.delta_q_xyzw), _quat_mul_xyzw(_quat_inv_xyzw(qi), qj))
-        if qe[3] < 0:
-            qe = -qe
+        qe = matrix_to_quat_xyzw(c.delta_R.T @ R_i.T @ R_j)  # w >= 0
         r[O_R:O_R + 3] = 2.0 * qe[:3]
         r[O_V:O_V + 3] = R_i.T @ (v_j - v_i - g * dt) - c.delta_v
         r[O_BA:O_BA + 3] = ba_j - ba_i
@@ -683,194 +469,17 @@ class Preintegrator:
 
     def predict(self, p_i, q_i_xyzw, v_i, gravity=DEFAULT_GRAVITY):
         """State at j from the state at i and the deltas: ``(p_j (3,), q_j_xyzw (4,), v_j (3,))``."""
-        p_i = _vec3(p_i, "p_i")
-        v_i = _vec3(v_i, "v_i")
-        qi = _quat(q_i_xyzw, "q_i_xyzw")
-        g = _vec3(gravity, "gravity")
+        p_i = as_vector(p_i, "p_i")
+        v_i = as_vector(v_i, "v_i")
+        g = as_vector(gravity, "gravity")
+        R_i = _rotation(q_i_xyzw, "q_i_xyzw")
         dt = self.delta_t_s
-        R_i = quat_xyzw_to_matrix(qi)
         p_j = p_i + v_i * dt + 0.5 * g * dt * dt + R_i @ self.delta_p
         v_j = v_i + g * dt + R_i @ self.delta_v
-        q_j = _quat_mul_xyzw(qi, self.delta_q_xyzw)
-        return p_j, (q_j if q_j[3] >= 0 else -q_j), v_j
+        return p_j, matrix_to_quat_xyzw(R_i @ self.delta_R), v_j
 
     def __repr__(self) -> str:
         return (
             f"Preintegrator(method={self.method!r}, covariance={self.covariance_model!r}, "
             f"n_samples={self._n}, delta_t_s={self.delta_t_s:.6f})"
         )
-
-
-# ----------------------------------------------------------------------------- windows
-
-
-@dataclass
-class WindowResult:
-    """Preintegrated windows of a recording compared with ground truth.
-
-    Attributes
-    ----------
-    t_i_ns, t_j_ns : (W,) int64 window bounds
-    n_samples : (W,) int, IMU samples used (including interpolated end samples)
-    error_p_m, error_v_m_s, error_theta_rad : (W,) norms of ``truth (-) estimate``
-    error : (W, 9) the errors ``(p, theta, v)``
-    nees : (W,) 9-dof NEES; NaN without noise parameters or for a singular covariance (one-step
-        windows: there ``p`` and ``v`` are driven by the same noise)
-    delta_p, delta_v : (W, 3); delta_q_xyzw : (W, 4), the preintegrated deltas
-    truth : list of :class:`Deltas`, ground-truth deltas
-    method, covariance_model : str
-    """
-
-    t_i_ns: np.ndarray
-    t_j_ns: np.ndarray
-    n_samples: np.ndarray
-    error: np.ndarray
-    nees: np.ndarray
-    delta_p: np.ndarray
-    delta_v: np.ndarray
-    delta_q_xyzw: np.ndarray
-    truth: list
-    method: str = "midpoint"
-    covariance_model: str = "consistent"
-
-    @property
-    def error_p_m(self):
-        return np.linalg.norm(self.error[:, 0:3], axis=1)
-
-    @property
-    def error_theta_rad(self):
-        return np.linalg.norm(self.error[:, 3:6], axis=1)
-
-    @property
-    def error_v_m_s(self):
-        return np.linalg.norm(self.error[:, 6:9], axis=1)
-
-    def to_dataframe(self):
-        import pandas as pd
-
-        return pd.DataFrame({
-            "t_i_ns": self.t_i_ns,
-            "t_j_ns": self.t_j_ns,
-            "dt_s": (self.t_j_ns - self.t_i_ns) * 1e-9,
-            "samples": self.n_samples,
-            "err_p_m": self.error_p_m,
-            "err_v_m_s": self.error_v_m_s,
-            "err_theta_deg": np.degrees(self.error_theta_rad),
-            "nees9": self.nees,
-        })
-
-
-def _gt_state_at(t_ns, gt_t_ns, gt_p, gt_R, gt_v, gt_bg, gt_ba):
-    """Ground-truth state at ``t_ns`` (exact stamp or linear/geodesic interpolation)."""
-    idx = int(np.searchsorted(gt_t_ns, t_ns))
-    if idx < len(gt_t_ns) and gt_t_ns[idx] == t_ns:
-        return gt_p[idx], gt_R[idx], gt_v[idx], gt_bg[idx], gt_ba[idx]
-    if idx == 0 or idx >= len(gt_t_ns):
-        raise InputError(f"time {t_ns} ns is outside the ground truth [{gt_t_ns[0]}, {gt_t_ns[-1]}] ns")
-    a, b = idx - 1, idx
-    u = float(t_ns - gt_t_ns[a]) / float(gt_t_ns[b] - gt_t_ns[a])
-    lerp = lambda x: (1 - u) * x[a] + u * x[b]  # noqa: E731
-    R = gt_R[a] @ so3_exp(u * so3_log(gt_R[a].T @ gt_R[b]))
-    return lerp(gt_p), R, lerp(gt_v), lerp(gt_bg), lerp(gt_ba)
-
-
-def _sample_at(t_ns, y, stamp):
-    """Linear interpolation of the rows of ``y`` at an integer stamp inside ``t_ns``."""
-    j = int(np.searchsorted(t_ns, stamp, side="right")) - 1
-    if t_ns[j] == stamp:
-        return y[j]
-    u = float(stamp - t_ns[j]) / float(t_ns[j + 1] - t_ns[j])
-    return (1.0 - u) * y[j] + u * y[j + 1]
-
-
-def _window_samples(t_ns, gyro, accel, a_ns, b_ns):
-    """Samples in ``[a_ns, b_ns]``, with linearly interpolated end samples when no sample falls
-    exactly on a bound."""
-    if a_ns < t_ns[0] or b_ns > t_ns[-1]:
-        raise InputError(f"window [{a_ns}, {b_ns}] ns is outside the IMU data [{t_ns[0]}, {t_ns[-1]}] ns")
-    lo = int(np.searchsorted(t_ns, a_ns, side="left"))
-    hi = int(np.searchsorted(t_ns, b_ns, side="right"))
-    tt, gg, aa = t_ns[lo:hi], gyro[lo:hi], accel[lo:hi]
-    if tt.size == 0 or tt[0] != a_ns:
-        tt = np.concatenate([[a_ns], tt])
-        gg = np.vstack([_sample_at(t_ns, gyro, a_ns), gg])
-        aa = np.vstack([_sample_at(t_ns, accel, a_ns), aa])
-    if tt[-1] != b_ns:
-        tt = np.concatenate([tt, [b_ns]])
-        gg = np.vstack([gg, _sample_at(t_ns, gyro, b_ns)])
-        aa = np.vstack([aa, _sample_at(t_ns, accel, b_ns)])
-    return tt.astype(np.int64), gg, aa
-
-
-def evaluate_windows(imu_t_ns, gyro, accel, gt_t_ns, gt_position, gt_quat_xyzw, gt_velocity,
-                     gt_bias_gyro, gt_bias_accel, windows_ns, noise=None, method="midpoint",
-                     covariance="consistent", gravity=DEFAULT_GRAVITY) -> WindowResult:
-    """Preintegrate a recording's IMU over windows and compare with its ground truth.
-
-    Parameters
-    ----------
-    imu_t_ns : (N,) int64; gyro, accel : (N, 3)
-        IMU samples (EuRoC ``imu0/data.csv``).
-    gt_t_ns : (M,) int64; gt_position, gt_velocity, gt_bias_gyro, gt_bias_accel : (M, 3);
-    gt_quat_xyzw : (M, 4)
-        Ground truth (EuRoC ``state_groundtruth_estimate0``); the state and biases at a window
-        start that falls between stamps are interpolated.
-    windows_ns : (W, 2) int64
-        ``[t_i, t_j]`` per window. IMU samples at the bounds are interpolated linearly when
-        no sample falls exactly on them.
-    noise : dict, optional
-        Kalibr keys ``gyroscope_noise_density``, ``accelerometer_noise_density``,
-        ``gyroscope_random_walk``, ``accelerometer_random_walk``; gives the NEES.
-    method, covariance : str
-        As in :class:`Preintegrator`.
-    gravity : (3,)
-        ``g_w`` the data were made with.
-
-    Returns
-    -------
-    WindowResult
-        Errors ``truth (-) estimate`` with the deltas linearized at the ground-truth biases at
-        ``t_i``, i.e. the first nine rows of :meth:`Preintegrator.residual` with true states.
-    """
-    imu_t_ns = np.asarray(imu_t_ns, dtype=np.int64)
-    gt_t_ns = np.asarray(gt_t_ns, dtype=np.int64)
-    gyro = np.asarray(gyro, dtype=np.float64)
-    accel = np.asarray(accel, dtype=np.float64)
-    gt_R = quat_xyzw_to_matrix(gt_quat_xyzw)
-    gt_p = np.asarray(gt_position, dtype=np.float64)
-    gt_v = np.asarray(gt_velocity, dtype=np.float64)
-    gt_bg = np.asarray(gt_bias_gyro, dtype=np.float64)
-    gt_ba = np.asarray(gt_bias_accel, dtype=np.float64)
-    windows = np.asarray(windows_ns, dtype=np.int64).reshape(-1, 2)
-    if noise is None:
-        dens = (0.0, 0.0, 0.0, 0.0)
-    else:
-        dens = (noise["gyroscope_noise_density"], noise["accelerometer_noise_density"],
-                noise["gyroscope_random_walk"], noise["accelerometer_random_walk"])
-    W = len(windows)
-    err = np.zeros((W, 9))
-    ne = np.full(W, np.nan)
-    dps, dvs, dqs, nsamp, truths = np.zeros((W, 3)), np.zeros((W, 3)), np.zeros((W, 4)), np.zeros(W, int), []
-    for w, (a_ns, b_ns) in enumerate(windows):
-        if b_ns <= a_ns:
-            raise InputError(f"window {w}: end {b_ns} ns is not after start {a_ns} ns")
-        ts, gs, as_ = _window_samples(imu_t_ns, gyro, accel, a_ns, b_ns)
-        p_i, R_i, v_i, bg_i, ba_i = _gt_state_at(a_ns, gt_t_ns, gt_p, gt_R, gt_v, gt_bg, gt_ba)
-        p_j, R_j, v_j, _, _ = _gt_state_at(b_ns, gt_t_ns, gt_p, gt_R, gt_v, gt_bg, gt_ba)
-        pre = Preintegrator(*dens, bias_gyro=bg_i, bias_accel=ba_i, method=method, covariance=covariance,
-                            compute_covariance=noise is not None)
-        pre.integrate((ts - a_ns).astype(np.float64) * 1e-9, gs, as_)
-        dt = pre.delta_t_s
-        dp, dv, dq = _deltas_from_states(p_i, R_i, v_i, p_j, R_j, v_j, dt, gravity)
-        truth = Deltas(dp, dv, dq, dt)
-        est = pre.deltas()
-        err[w] = delta_error(est, truth)
-        if noise is not None and len(ts) >= 3:  # one step: p and v share one noise, singular
-            try:
-                ne[w] = nees(err[w], pre.covariance[:9, :9])
-            except SplineImuError:
-                pass  # singular (too few samples): NaN
-        dps[w], dvs[w], dqs[w], nsamp[w] = est.delta_p, est.delta_v, est.delta_q_xyzw, len(ts)
-        truths.append(truth)
-    return WindowResult(windows[:, 0].copy(), windows[:, 1].copy(), nsamp, err, ne, dps, dvs, dqs, truths,
-                        method, covariance)

@@ -1,0 +1,141 @@
+"""Allan analysis of a recorded file: read, compute the curves, fit, write ``allan.yaml`` / ``allan.png``."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ..errors import ConfigError, OutputExistsError
+from .deviation import AllanResult, allan_deviation
+from .fit import NoiseFit, fit_noise_parameters
+from .report import allan_yaml_header, format_table, imu_noise_dict
+
+__all__ = ["AllanAnalysis", "analyze_recording", "allan_output_paths", "write_allan_outputs", "IMU_LABELS"]
+
+#: Column names of a six-axis recording.
+IMU_LABELS = ("gyro x", "gyro y", "gyro z", "accel x", "accel y", "accel z")
+
+
+@dataclass
+class AllanAnalysis:
+    """Allan deviation and noise parameters of one recording.
+
+    Attributes
+    ----------
+    result : AllanResult
+        The six curves (gyro x y z [rad/s], accel x y z [m/s^2]) with their intervals.
+    fit : NoiseFit
+        N, K, B per axis.
+    source : str
+        The file analysed.
+    notes : list of str
+        What the reader assumed or found (an assumed rate, gaps).
+    """
+
+    result: AllanResult
+    fit: NoiseFit
+    source: str = ""
+    notes: list = field(default_factory=list)
+
+    @property
+    def rate_hz(self) -> float:
+        return self.result.rate_hz
+
+    def to_dataframe(self):
+        """One row per axis: the noise parameters and their intervals (:meth:`NoiseFit.to_dataframe`)."""
+        return self.fit.to_dataframe()
+
+    def noise_dict(self) -> dict:
+        """The mapping written to ``allan.yaml`` (:func:`~splineimu.allan.imu_noise_dict`)."""
+        return imu_noise_dict(self.result, self.fit, source=self.source)
+
+    def format_table(self) -> str:
+        """The text table ``splineimu allan`` prints."""
+        return format_table(self.result, self.fit, source=self.source)
+
+
+def analyze_recording(path, fmt=None, rate_hz=None, gyro_unit=None, accel_unit=None,
+                      points_per_decade: float = 10.0) -> AllanAnalysis:
+    """Overlapping Allan deviation and noise parameters of all six axes of a static recording.
+
+    Parameters
+    ----------
+    path : path-like
+        EuRoC IMU csv or ``.rda`` matrix; see :func:`splineimu.io.imu_csv.load_recording` for
+        ``fmt``, ``rate_hz``, ``gyro_unit`` and ``accel_unit``.
+    points_per_decade : float
+        Density of the log-spaced cluster times.
+
+    Returns
+    -------
+    AllanAnalysis
+
+    Raises
+    ------
+    InputError, ConfigError
+        Unreadable file or bad options.
+
+    Examples
+    --------
+    >>> import tempfile, os, numpy as np
+    >>> p = os.path.join(tempfile.mkdtemp(), "imu.csv")
+    >>> y = np.random.default_rng(0).standard_normal((2000, 6)) * 0.01
+    >>> _ = open(p, "w").write("".join(f"{i * 10_000_000}," + ",".join(map(repr, r)) + "\\n"
+    ...                                for i, r in enumerate(y.tolist())))
+    >>> a = analyze_recording(p)
+    >>> a.rate_hz, a.result.labels[0], a.to_dataframe().shape
+    (100.0, 'gyro x', (6, 13))
+    """
+    from ..io.imu_csv import load_recording
+
+    rec = load_recording(path, fmt, rate_hz, gyro_unit, accel_unit)
+    result = allan_deviation(rec.values, rec.rate_hz, points_per_decade=points_per_decade,
+                             labels=list(IMU_LABELS))
+    return AllanAnalysis(result, fit_noise_parameters(result), source=str(path), notes=list(rec.notes))
+
+
+def allan_output_paths(out_dir, plot: bool = False, force: bool = False) -> list:
+    """``[out_dir/allan.yaml (, out_dir/allan.png)]``, checked before any work is done.
+
+    Raises
+    ------
+    ConfigError
+        ``out_dir`` exists and is not a folder.
+    OutputExistsError
+        A target exists and ``force`` is false.
+    """
+    out_dir = Path(out_dir)
+    if out_dir.exists() and not out_dir.is_dir():
+        raise ConfigError(f"-o {out_dir}: exists and is not a directory")
+    targets = [out_dir / "allan.yaml"] + ([out_dir / "allan.png"] if plot else [])
+    existing = [str(p) for p in targets if p.exists()]
+    if existing and not force:
+        raise OutputExistsError(f"{', '.join(existing)} exist(s); use --force to overwrite")
+    return targets
+
+
+def write_allan_outputs(analysis: AllanAnalysis, out_dir, plot: bool = False, force: bool = False) -> list:
+    """Write ``out_dir/allan.yaml`` (Kalibr keys, usable as ``--imu``) and with ``plot`` ``allan.png``.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written.
+
+    Raises
+    ------
+    ConfigError, OutputExistsError
+        As :func:`allan_output_paths`.
+    """
+    from ..io.yaml import write_yaml
+
+    targets = allan_output_paths(out_dir, plot, force)
+    Path(out_dir).mkdir(parents=True, exist_ok=True)
+    result = analysis.result
+    write_yaml(targets[0], analysis.noise_dict(), allan_yaml_header(result, analysis.source))
+    if plot:
+        from .plot import plot_allan
+
+        plot_allan(result, analysis.fit, targets[1],
+                   title=f"{Path(analysis.source).name}: {result.duration_s / 3600:.2f} h at {result.rate_hz:.6g} Hz")
+    return targets

@@ -1,0 +1,321 @@
+"""Synthesis jobs: from a pose file or an analytic scene to IMU data, its ground truth and a report.
+
+One function per job; the ``from-tum``, ``from-euroc``, ``scene`` and ``run`` commands only
+build a :class:`~splineimu.api.options.SynthesisJob` and call :func:`run_job`.
+
+- :func:`synthesize_poses`: read the pose file, check its gaps (stop, bridge, or split it into
+  pieces, one output folder each), fit a spline, choose the stamps, synthesize, write.
+- :func:`synthesize_scene`: the same from an analytic scene (exact derivatives).
+- :func:`run_job`: either, by the job's motion input.
+- :func:`synthesize_to_memory`: the same work without files; the arrays are in the result.
+
+Examples
+--------
+>>> from splineimu.api import ImuOptions, SceneInput, SynthesisJob, synthesize_to_memory
+>>> res = synthesize_to_memory(SynthesisJob(SceneInput("static", duration_s=1.0), ImuOptions(rate_hz=10)))
+>>> res.synthesis.t_ns.size, res.synthesis.accel_m_s2[0].tolist()
+(11, [0.0, 0.0, 9.81])
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import ConfigError, InputError
+from .options import PosesInput, SceneInput, SynthesisJob
+from .report import fit_lines, imu_line, poses_report, scene_report
+
+#: --gaps split: pieces with fewer poses are skipped (a spline of order 6 needs a few knots of data)
+MIN_PIECE_POSES = 12
+
+
+@dataclass
+class SynthesisResult:
+    """What a synthesis job did.
+
+    Attributes
+    ----------
+    job : SynthesisJob
+    report : dict
+        The content of ``report.json`` (of the first piece when the input was split).
+    out_dir : pathlib.Path or None
+        The output folder (None when nothing was written).
+    lines : list of str
+        The summary the command line prints (timings included; they are not in the report).
+    notes : list of str
+        Notices about the input (ignored columns, dropped stamps, ...), printed to stderr.
+    fit_report : FitReport or None
+        The spline fit (pose inputs).
+    source : MotionSource
+        The fitted spline or the scene.
+    synthesis : Synthesis or None
+        The arrays, from :func:`synthesize_to_memory`.
+    pieces : list of SynthesisResult
+        One per piece when a pose file was split at its gaps (``gaps="split"``).
+    """
+
+    job: SynthesisJob
+    report: dict = field(default_factory=dict)
+    out_dir: Path | None = None
+    lines: list = field(default_factory=list)
+    notes: list = field(default_factory=list)
+    fit_report: object = None
+    source: object = None
+    synthesis: object = None
+    pieces: list = field(default_factory=list)
+
+
+class _Log:
+    def __init__(self, result, echo):
+        self.result = result
+        self.echo = echo
+
+    def line(self, text):
+        self.result.lines.append(text)
+        if self.echo:
+            self.echo(text, False)
+
+    def note(self, text):
+        self.result.notes.append(text)
+        if self.echo:
+            self.echo(text, True)
+
+
+def run_job(job: SynthesisJob, *, echo=None, write: bool = True) -> SynthesisResult:
+    """Run a synthesis job: :func:`synthesize_poses` or :func:`synthesize_scene` by its motion input.
+
+    Parameters
+    ----------
+    job : SynthesisJob
+    echo : callable, optional
+        ``echo(text, is_note)`` is called with each summary line as the work proceeds (the
+        command line prints them; notes go to stderr).
+    write : bool
+        Write the output folder (``job.output.dir``); without it the arrays are kept in
+        :attr:`SynthesisResult.synthesis` and nothing is written.
+
+    Returns
+    -------
+    SynthesisResult
+
+    Raises
+    ------
+    InputError, ConfigError, OutputExistsError
+        Bad input file or options; an output folder that exists (without ``force``).
+    """
+    if isinstance(job.motion, PosesInput):
+        return synthesize_poses(job, echo=echo, write=write)
+    return synthesize_scene(job, echo=echo, write=write)
+
+
+def synthesize_to_memory(job: SynthesisJob) -> SynthesisResult:
+    """:func:`run_job` without files: the result holds the :class:`~splineimu.pipeline.Synthesis`."""
+    return run_job(job, write=False)
+
+
+def _start(job, motion_type, echo, write):
+    """Check the job's kind and its output location (fail fast); the wall clock, result and log."""
+    if not isinstance(job.motion, motion_type):
+        raise ConfigError(f"expected a job with {motion_type.__name__}, got {type(job.motion).__name__}")
+    result = SynthesisResult(job)
+    _check_output(job, write)
+    return time.perf_counter(), result, _Log(result, echo)
+
+
+def _check_output(job, write):
+    if write:
+        if job.output.dir is None and job.output.tum is None:
+            raise ConfigError("nothing to write: give an output folder (or, for a scene, a TUM file)",
+                              option="--out")
+        if job.output.dir is not None:
+            from ..io.output import check_output_dir
+
+            check_output_dir(job.output.dir, job.output.force)
+
+
+def _seed(job):
+    """A given seed, or (with a sensor model) a fresh one that is reported so that the run can be repeated."""
+    if job.imu.seed is not None or job.imu.imu_config is None:
+        return job.imu.seed
+    return int(np.random.SeedSequence().entropy % (2**63))
+
+
+def _stamps(job, first_ns: int, last_ns: int, log):
+    if job.imu.timestamps is None:
+        from ..timegrid import uniform_stamps_ns
+
+        return uniform_stamps_ns(first_ns, last_ns, job.imu.rate_hz)
+    from ..io.timestamps import read_timestamps
+
+    stamps = read_timestamps(job.imu.timestamps)
+    keep = (stamps >= first_ns) & (stamps <= last_ns)
+    if not keep.any():
+        raise InputError(f"no stamp lies inside the motion's span [{first_ns}, {last_ns}] ns",
+                         path=job.imu.timestamps)
+    dropped = int((~keep).sum())
+    if dropped:
+        log.line(f"note: {dropped} stamps of {job.imu.timestamps} lie outside the pose span and were dropped")
+    return stamps[keep]
+
+
+def _synthesize(job, source, t_ns, seed, out_dir, report, write, result, force=None, fit_data=None):
+    from ..pipeline import synthesize_stream, write_output
+
+    imu = job.imu
+    syn = synthesize_stream(source, t_ns, gravity=imu.gravity, extrinsic=imu.body_T_sensor,
+                            imu_config=imu.imu_config, seed=seed, sampling=imu.sampling,
+                            with_increments=imu.increments)
+    if write:
+        result.report = write_output(syn, out_dir, force=job.output.force if force is None else force, report=report,
+                                     bag=job.output.bag, plot=job.output.plot, fit_data=fit_data)
+        result.out_dir = Path(out_dir)
+    else:
+        result.synthesis = syn.collect()
+        result.report = report
+    return result
+
+
+def synthesize_scene(job: SynthesisJob, *, echo=None, write: bool = True) -> SynthesisResult:
+    """IMU data from an analytic scene (exact derivatives); parameters as :func:`run_job`.
+
+    With ``job.output.tum`` the scene's poses at the IMU rate are also written as a TUM file.
+    """
+    from .. import scenes
+
+    t_wall, result, log = _start(job, SceneInput, echo, write)
+    m = job.motion
+    scene = scenes.make_scene(m.name, duration_s=m.duration_s, t0_ns=m.t0_ns, **m.params)
+    result.source = scene
+    if write and job.output.tum:
+        scenes.write_scene_tum(scene, job.output.tum, job.imu.rate_hz)
+        log.line(f"poses         {job.output.tum} ({job.imu.rate_hz:g} Hz)")
+    if write and job.output.dir is None:
+        return result
+    t_ns = _stamps(job, scene.origin_ns, scene.origin_ns + int(round(scene.t_max_s * 1e9)), log)
+    seed = _seed(job)
+    _synthesize(job, scene, t_ns, seed, job.output.dir, scene_report(scene, job), write, result)
+    log.line(f"scene         {m.name}, {scene.t_max_s:g} s")
+    log.line(imu_line(t_ns, job, seed))
+    if write:
+        log.line(f"written       {job.output.dir}  ({time.perf_counter() - t_wall:.2f} s)")
+    return result
+
+
+def synthesize_poses(job: SynthesisJob, *, echo=None, write: bool = True) -> SynthesisResult:
+    """IMU data from a pose file through a fitted spline; parameters as :func:`run_job`.
+
+    Gaps longer than ``max_gap_s`` stop the job (``gaps="error"``), are fitted through
+    (``"bridge"``), or split the file into pieces written to ``part_000``, ``part_001``, ...
+    inside the output folder (``"split"``; pieces of fewer than :data:`MIN_PIECE_POSES` poses
+    are skipped). The result of each piece is in :attr:`SynthesisResult.pieces`.
+    """
+    from ..io.poses import find_gaps, split_at_gaps
+
+    t_wall, result, log = _start(job, PosesInput, echo, write)
+    m = job.motion
+    track = _read(m)
+    for note in track.notices:
+        log.note(f"note: {m.path}: {note}")
+    med = float(np.median(np.diff(track.t_ns))) / 1e9
+    max_gap = m.max_gap_s if m.max_gap_s is not None else max(0.5, 5.0 * med)
+    gaps = find_gaps(track.t_ns, max_gap, getattr(track, "line_numbers", None))
+    if gaps and m.gaps == "error":
+        g = gaps[0]
+        more = f" (and {len(gaps) - 1} more)" if len(gaps) > 1 else ""
+        raise InputError(
+            f"gap of {g.duration_s:.3f} s before this pose{more} exceeds --max-gap {max_gap:g} s; "
+            "use --gaps bridge to fit through it or --gaps split to write one folder per piece",
+            path=m.path, line=g.line)
+    log.line(f"input         {m.path}: {track.t_ns.size} poses, {(track.t_ns[-1] - track.t_ns[0]) / 1e9:.3f} s, "
+             f"median spacing {med * 1e3:.3f} ms")
+    if not (gaps and m.gaps == "split"):
+        _one(job, track, job.output.dir, gaps, max_gap, write, result, log)
+        if write:
+            log.line(f"written       {job.output.dir}  ({time.perf_counter() - t_wall:.2f} s)")
+        return result
+    pieces = split_at_gaps(track, gaps)
+    short = [p for p in pieces if p.t_ns.size < MIN_PIECE_POSES]
+    pieces = [p for p in pieces if p.t_ns.size >= MIN_PIECE_POSES]
+    if short:
+        log.line(f"note: {len(short)} pieces with fewer than {MIN_PIECE_POSES} poses were skipped "
+                 f"({sum(p.t_ns.size for p in short)} poses)")
+    if not pieces:
+        raise InputError(f"no piece between gaps has {MIN_PIECE_POSES} poses or more", path=m.path)
+    if not write:
+        for piece in pieces:
+            result.pieces.append(_one(job, piece, None, [], max_gap, False, SynthesisResult(job), None))
+        return result
+    from ..io.output import OutputFolder
+
+    with OutputFolder(job.output.dir, force=job.output.force) as tmp:
+        for i, piece in enumerate(pieces):
+            sub = tmp / f"part_{i:03d}"
+            log.line(f"piece {i}       {piece.t_ns.size} poses from {piece.t_ns[0]} ns -> {sub.name}")
+            res = _one(job, piece, sub, [], max_gap, True, SynthesisResult(job), None)
+            res.out_dir = Path(job.output.dir) / sub.name
+            result.pieces.append(res)
+    result.out_dir = Path(job.output.dir)
+    result.report = result.pieces[0].report
+    log.line(f"written       {job.output.dir} ({len(pieces)} pieces, {time.perf_counter() - t_wall:.2f} s)")
+    return result
+
+
+def _read(m: PosesInput):
+    if m.format == "tum":
+        from ..io.tum import read_tum
+
+        return read_tum(m.path, repeated_stamps=m.repeated_stamps)
+    from ..io.euroc import read_euroc_groundtruth
+
+    return read_euroc_groundtruth(m.path, repeated_stamps=m.repeated_stamps)
+
+
+def _one(job, track, out_dir, gaps, max_gap, write, result, log):
+    """Fit, stamps, synthesis and output of one piece of a pose file (``log`` None: quiet)."""
+    from ..spline.fit import fit
+
+    quiet = log is None
+    log = log or _Log(result, None)
+    sp = job.motion.spline
+    origin = int(track.t_ns[0])
+    t_s = (track.t_ns - origin).astype(np.float64) / 1e9
+    smooth = {} if sp.smoothness is None else {"smoothness": sp.smoothness}  # None: the fit's default
+    spl, rep = fit(t_s, track.positions, track.quat_xyzw, kind=sp.kind, order=sp.order,
+                   knot_spacing_s=sp.knot_spacing_s, **smooth, origin_ns=origin,
+                   reject_outliers=not sp.keep_outliers, progress=track.t_ns.size > 100_000, return_report=True)
+    result.source, result.fit_report = spl, rep
+    if rep.dropped_poses:
+        lines = getattr(track, "line_numbers", None)
+        where = [int(lines[i]) for i in rep.dropped_poses] if lines is not None else rep.dropped_poses
+        rep.dropped_poses = [{"index": int(i), "line": int(w), "t_ns": int(track.t_ns[i])}
+                             for i, w in zip(rep.dropped_poses, where)]
+        log.line(f"outliers      {len(where)} poses dropped (lines {', '.join(map(str, where[:8]))}"
+                 f"{', ...' if len(where) > 8 else ''}); --keep-outliers keeps them")
+    t_ns = _stamps(job, int(track.t_ns[0]), int(track.t_ns[-1]), log)
+    seed = _seed(job)
+    fit_data = _fit_residuals(spl, t_s, track) if (write and job.output.plot) else None
+    report = poses_report(job, track, rep, gaps, max_gap)
+    _synthesize(job, spl, t_ns, seed, out_dir, report, write, result, force=job.output.force if not quiet else False,
+                fit_data=fit_data)
+    if not quiet:
+        for text in fit_lines(rep, gaps, max_gap):
+            log.line(text)
+        log.line(imu_line(t_ns, job, seed, detailed=True))
+    return result
+
+
+def _fit_residuals(spl, t_s, track):
+    from .. import lie
+
+    p_fit, q_fit = spl.pose(t_s)
+    ang = lie.so3_log(np.matmul(np.swapaxes(lie.quat_xyzw_to_matrix(q_fit), 1, 2),
+                                lie.quat_xyzw_to_matrix(track.quat_xyzw)))
+    return t_s, track.positions - p_fit, ang
+
+
+__all__ = ["SynthesisResult", "run_job", "synthesize_poses", "synthesize_scene", "synthesize_to_memory",
+           "MIN_PIECE_POSES"]

@@ -1,0 +1,1 @@
+"""Monte-Carlo batches: seeded variants of one scene on a Dask cluster."""
