@@ -19,9 +19,10 @@ PKG = REPO / "splineimu"
 MAX_MODULE_LINES = 600
 MAX_COMMAND_LINES = 200
 
-# The restructuring of issue 12 lands in several branches; until all of them are on main these
-# checks may fail. Flip to a plain test (remove the mark) once everything is merged.
-PENDING = pytest.mark.xfail(strict=False, reason="issue 12: layout lands branch by branch")
+# The restructuring of issue 12 lands in several branches; a check that main does not meet yet
+# is marked PENDING. Remove the mark once the branch that fixes it is merged.
+PENDING = pytest.mark.xfail(strict=False, reason="issue 12: spline.fit <-> spline.knots, removed by the spline "
+                            "branch; remove this mark once it is merged")
 
 # Layers, lowest first; a module may import its own layer and the layers before it. A module is
 # placed by the first rule (a prefix of its dotted name below ``splineimu``) that matches it.
@@ -183,21 +184,18 @@ def test_graph_covers_the_package():
 
 # ---- the rules ------------------------------------------------------------------------------
 
-@PENDING
 def test_no_module_over_600_lines():
     long = {n: len(p.read_text(encoding="utf-8").splitlines()) for n, p in modules().items()}
     over = {n: k for n, k in long.items() if k > MAX_MODULE_LINES}
     assert not over, f"modules over {MAX_MODULE_LINES} lines (split by responsibility): {over}"
 
 
-@PENDING
 def test_command_modules_are_thin():
     over = {p.name: k for p in sorted((PKG / "commands").glob("*.py"))
             if (k := len(p.read_text(encoding="utf-8").splitlines())) > MAX_COMMAND_LINES}
     assert not over, f"commands over {MAX_COMMAND_LINES} lines (move the work into the library): {over}"
 
 
-@PENDING
 def test_library_never_imports_the_command_line():
     bad = {n: sorted(d for d in deps if is_cli(d)) for n, deps in import_graph().items() if not is_cli(n)}
     bad = {n: d for n, d in bad.items() if d}
@@ -210,12 +208,25 @@ def test_no_import_cycle():
     assert not cycles, "import cycles (lazy imports count):\n" + "\n".join(" <-> ".join(c) for c in cycles)
 
 
-@PENDING
-def test_layers_import_only_lower_layers():
+def layer_violations(allow_math_io: bool) -> list[str]:
     rank = {layer: i for i, layer in enumerate(LAYERS)}
     bad = []
     for name, deps in import_graph().items():
         for d in sorted(deps):
-            if rank[layer_of(d)] > rank[layer_of(name)]:
-                bad.append(f"{name} ({layer_of(name)}) imports {d} ({layer_of(d)})")
+            low, high = layer_of(name), layer_of(d)
+            if rank[high] > rank[low] and not (allow_math_io and (low, high) == ("math", "io")):
+                bad.append(f"{name} ({low}) imports {d} ({high})")
+    return bad
+
+
+def test_layers_import_only_lower_layers():
+    bad = layer_violations(allow_math_io=True)
     assert not bad, "imports against the layers (README, Architecture):\n" + "\n".join(bad)
+
+
+@pytest.mark.xfail(strict=False, reason="the jobs that read or write files (allan.recording, calibration.api, "
+                   "integrate, preintegration.windows, groundtruth, imu presets, scenes.tum, pipeline) still "
+                   "live in math packages; move them to api/ (or the format code to io/) to make this pass")
+def test_math_never_imports_io():
+    bad = [v for v in layer_violations(allow_math_io=False) if v.endswith("(io)") and "(math) imports" in v]
+    assert not bad, "math modules importing io:\n" + "\n".join(bad)
