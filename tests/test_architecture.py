@@ -19,11 +19,6 @@ PKG = REPO / "splineimu"
 MAX_MODULE_LINES = 600
 MAX_COMMAND_LINES = 200
 
-# The restructuring of issue 12 lands in several branches; a check that main does not meet yet
-# is marked PENDING. Remove the mark once the branch that fixes it is merged.
-PENDING = pytest.mark.xfail(strict=False, reason="issue 12: spline.fit <-> spline.knots, removed by the spline "
-                            "branch; remove this mark once it is merged")
-
 # Layers, lowest first; a module may import its own layer and the layers before it. A module is
 # placed by the first rule (a prefix of its dotted name below ``splineimu``) that matches it.
 LAYERS = ("kernels", "foundation", "math", "io", "api", "cli")
@@ -202,7 +197,6 @@ def test_library_never_imports_the_command_line():
     assert not bad, f"library modules importing cli/commands: {bad}"
 
 
-@PENDING
 def test_no_import_cycle():
     cycles = find_cycles(import_graph())
     assert not cycles, "import cycles (lazy imports count):\n" + "\n".join(" <-> ".join(c) for c in cycles)
