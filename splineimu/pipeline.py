@@ -324,7 +324,7 @@ def _versions():
 
 def write_output(syn, out_dir, *, force=False, report: dict | None = None, bag: str | None = None,
                  plot: bool = False, fit_data=None, progress: bool | None = None, rate_hz: float | None = None,
-                 rostopic: str = "/imu0", bag_version: int | None = None):
+                 rostopic: str = "/imu0", bag_version: int | None = None, extra=None):
     """Write the output folder, a EuRoC / ASL dataset, atomically (DESIGN.md section 6).
 
     ``mav0/imu0/data.csv`` and its ``sensor.yaml``, ``mav0/state_groundtruth_estimate0/data.csv``
@@ -348,6 +348,9 @@ def write_output(syn, out_dir, *, force=False, report: dict | None = None, bag: 
     and written piece by piece, in bounded memory (bags and plots need the whole record and
     collect it first). ``progress`` shows a progress bar on stderr (default: for long
     records, when stderr is a terminal).
+
+    ``extra(tmp, report)``, when given, writes more files into the temporary folder (and may
+    add to the report) just before ``report.json``: they appear atomically with the rest.
     """
     from .io import dataset as ds
     from .io.euroc import EUROC_GROUNDTRUTH_HEADER, EUROC_IMU_HEADER
@@ -454,6 +457,8 @@ def write_output(syn, out_dir, *, force=False, report: dict | None = None, bag: 
                 plot_fit_residuals(*fit_data, tmp / "fit_residuals.png")
                 plots.append("fit_residuals.png")
             out_report["plots"] = plots
+        if extra is not None:
+            extra(tmp, out_report)
         (tmp / "report.json").write_text(json.dumps(out_report, indent=2, default=_json_default) + "\n")
     return out_report
 
