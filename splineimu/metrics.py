@@ -422,6 +422,9 @@ def plot_compare(result: CompareResult, path) -> Path:
         ax.set_ylabel(f"{r.metric.upper()} ({r.unit})")
         ax.set_title(r.title, fontsize="small")
         ax.legend(loc="best", fontsize="small")
+    from .io.files import staged_path
+
     out = Path(path)
-    fig.savefig(out, dpi=110)
+    with staged_path(out) as tmp:  # a failure or an interrupt leaves what was there
+        fig.savefig(tmp, dpi=110, format="png")
     return out

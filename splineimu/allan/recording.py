@@ -94,23 +94,28 @@ def analyze_recording(path, fmt=None, rate_hz=None, gyro_unit=None, accel_unit=N
     return AllanAnalysis(result, fit_noise_parameters(result), source=str(path), notes=list(rec.notes))
 
 
-def allan_output_paths(out_dir, plot: bool = False, force: bool = False) -> list:
+def allan_output_paths(out_dir, plot: bool = False, force: bool = False, inputs=()) -> list:
     """``[out_dir/allan.yaml (, out_dir/allan.png)]``, checked before any work is done.
 
     Raises
     ------
     ConfigError
-        ``out_dir`` exists and is not a folder.
+        ``out_dir`` exists and is not a folder; a target is a symbolic link, a folder or one of
+        ``inputs`` (the files the analysis reads).
     OutputExistsError
         A target exists and ``force`` is false.
     """
+    from ..io.files import check_output_file
+
     out_dir = Path(out_dir)
     if out_dir.exists() and not out_dir.is_dir():
         raise ConfigError(f"-o {out_dir}: exists and is not a directory")
     targets = [out_dir / "allan.yaml"] + ([out_dir / "allan.png"] if plot else [])
-    existing = [str(p) for p in targets if p.exists()]
+    existing = [str(p) for p in targets if p.exists() or p.is_symlink()]
     if existing and not force:
         raise OutputExistsError(f"{', '.join(existing)} exist(s); use --force to overwrite")
+    for p in targets:
+        check_output_file(p, True, inputs=inputs)
     return targets
 
 

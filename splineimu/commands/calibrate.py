@@ -228,6 +228,9 @@ def run(args) -> int:
     sensor = "accelerometer" if args.sensor == "accel" else "gyroscope"
     target = Path(args.out) / "calibration.yaml" if args.out else None
     if target is not None:
+        from ..io.files import check_output_file
+
+        check_output_file(target, True, inputs=[args.input, args.truth])  # a link, a folder or an input
         if Path(args.out).exists() and not Path(args.out).is_dir():
             raise OutputExistsError(f"output path '{args.out}' exists and is not a folder")
         if target.exists() and not args.force:

@@ -38,11 +38,14 @@ def add_arguments(parser) -> None:
                         default=(0.0, 0.0, -9.81), help="gravity in the world frame [m/s^2] "
                         "(default: 0 0 -9.81)")
     parser.add_argument("-o", "--output", required=True, metavar="TRAJ.tum", help="output TUM file")
+    parser.add_argument("--force", action="store_true", help="replace an existing output file")
 
 
 def run(args) -> int:
     from ..integrate import dead_reckon
+    from ..io.files import check_output_file
 
+    check_output_file(args.output, args.force, inputs=[args.imu_csv, args.init])
     res = dead_reckon(args.imu_csv, init=args.init, method=args.method, gravity=args.gravity)
     if res.skipped_samples:
         print(f"skipping {res.skipped_samples} IMU samples before the ground truth starts")

@@ -50,12 +50,16 @@ def add_arguments(parser) -> None:
                         help="ground truth instead of OUT_FOLDER/state_groundtruth_estimate0/data.csv")
     parser.add_argument("--all", action="store_true", help="print every window (default: at most 40)")
     parser.add_argument("-o", "--output", metavar="CSV", default=None, help="also write the table as csv")
+    parser.add_argument("--force", action="store_true", help="replace an existing output file")
 
 
 def run(args) -> int:
-    from ..io.output import atomic_write_text
+    from ..io.files import check_output_file, write_output_file
     from ..preintegration import evaluate_recording
 
+    inputs = [args.out_folder, args.imu_csv, args.groundtruth, args.stamps]
+    if args.output:
+        check_output_file(args.output, args.force, inputs=inputs)
     res = evaluate_recording(args.out_folder, imu_csv=args.imu_csv, groundtruth=args.groundtruth,
                              every=args.every, stamps=args.stamps, imu=args.imu, method=args.method,
                              covariance=args.covariance, gravity=args.gravity)
@@ -73,5 +77,5 @@ def run(args) -> int:
             print(f"mean NEES {test.mean:.3f} (9 dof; 95% interval for {test.n_windows} windows "
                   f"[{test.low:.3f}, {test.high:.3f}]: {'inside' if test.inside else 'OUTSIDE'})")
     if args.output:
-        print(f"table -> {atomic_write_text(args.output, df.to_csv(index=False))}")
+        print(f"table -> {write_output_file(args.output, df.to_csv(index=False), args.force, inputs=inputs)}")
     return 0

@@ -139,9 +139,12 @@ def read_imu_csv(path):
 def read_imu_table(path):
     """:func:`read_imu_csv`, returning ``(t_ns (N,), values (N, 6))`` with the gyro in columns
     0-2 and the accelerometer in 3-5 (one array, no further copies)."""
+    from .timestamps import check_line_lengths
+
     path = Path(path)
     if not path.is_file():
-        raise InputError("file not found", path)
+        raise InputError("file not found" if not path.exists() else "is a folder, expected a file", path)
+    check_line_lengths(path)
     try:
         t_ns, vals = _read_fast(path)
     except Exception:  # noqa: BLE001 - any failure: the exact parser finds and names the line

@@ -13,6 +13,7 @@ parse fails, to either accept a ragged file or name the first bad line.
 from __future__ import annotations
 
 import decimal
+import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -21,7 +22,11 @@ import numpy as np
 from ..errors import InputError
 from ..validation import one_of
 
-__all__ = ["parse_stamps", "read_timestamps", "read_table", "Table"]
+__all__ = ["parse_stamps", "read_timestamps", "read_table", "Table", "check_line_lengths", "MAX_LINE_BYTES"]
+
+#: Longest line a text table may have (a data row is some hundred bytes; a longer "line" is
+#: a binary or foreign file, refused before it is read whole).
+MAX_LINE_BYTES = 1 << 20
 
 _NS_PER_S = 1_000_000_000
 _INT64_MAX = np.iinfo(np.int64).max
@@ -196,7 +201,61 @@ class Table:
         return f"ignored {cols} on {where}"
 
 
+def check_line_lengths(path, max_bytes: int = MAX_LINE_BYTES) -> None:
+    """Refuse a file with a line longer than ``max_bytes``, without reading that line whole.
+
+    The file is mapped and only probed: every aligned block of ``max_bytes // 2`` bytes must
+    hold a newline (the search stops at the first), so clean files cost a few microseconds
+    per megabyte; only a block without one is looked at closely.
+
+    Raises
+    ------
+    InputError
+        The file is missing, a folder, unreadable, or has such a line (its number is given).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "t.txt"
+    >>> _ = p.write_text("1 2\n" + "x" * 100 + "\n")
+    >>> check_line_lengths(p, max_bytes=64)
+    Traceback (most recent call last):
+    ...
+    splineimu.errors.InputError: ...t.txt:2: line longer than 64 bytes: not a text table of this kind
+    """
+    import mmap
+
+    try:
+        with open(path, "rb") as fh:
+            size = os.fstat(fh.fileno()).st_size
+            if size <= max_bytes:
+                return
+            with mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ) as mm:
+                _probe_lines(mm, size, max_bytes, path)
+    except FileNotFoundError:
+        raise InputError("file not found", path=path) from None
+    except IsADirectoryError:
+        raise InputError("is a folder, expected a file", path=path) from None
+    except PermissionError:
+        raise InputError("permission denied", path=path) from None
+
+
+def _probe_lines(mm, size, max_bytes, path):
+    block = max(max_bytes // 2, 1)
+    for start in range(0, size, block):
+        end = min(start + block, size)
+        if end - start < block or mm.find(b"\n", start, end) >= 0:
+            continue
+        first = mm.rfind(b"\n", 0, start) + 1  # the line holding this block starts here
+        nxt = mm.find(b"\n", first, first + max_bytes + 1)
+        if nxt < 0 and size - first > max_bytes:
+            line = mm[:first].count(b"\n") + 1
+            raise InputError(f"line longer than {max_bytes} bytes: not a text table of this kind",
+                             path=path, line=line)
+
+
 def _read_lines(path) -> list[str]:
+    check_line_lengths(path)
     p = Path(path)
     try:
         raw = p.read_bytes()
