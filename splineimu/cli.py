@@ -69,18 +69,28 @@ def _raise_terminated(signum, frame):
     raise Terminated(signum)
 
 
-def _install_signal_handlers() -> None:
+def _install_signal_handlers() -> dict:
     """SIGTERM and SIGHUP raise :class:`Terminated` (a KeyboardInterrupt, as SIGINT raises);
-    the ``with`` blocks of the atomic outputs then remove their temporaries."""
+    the ``with`` blocks of the atomic outputs then remove their temporaries. Returns the
+    handlers replaced, for :func:`_restore_signal_handlers`."""
     import signal
 
+    old = {}
     for name in ("SIGTERM", "SIGHUP"):
         sig = getattr(signal, name, None)
         if sig is not None and signal.getsignal(sig) in (signal.SIG_DFL, None):
             try:
-                signal.signal(sig, _raise_terminated)
+                old[sig] = signal.signal(sig, _raise_terminated)
             except ValueError:  # not the main thread (main() called from a library user's thread)
-                return
+                break
+    return old
+
+
+def _restore_signal_handlers(old: dict) -> None:
+    import signal
+
+    for sig, handler in old.items():
+        signal.signal(sig, handler)
 
 
 def _os_error_text(exc: OSError) -> str:
@@ -110,7 +120,14 @@ def main(argv=None) -> int:
     if not getattr(args, "_run", None):
         parser.print_help()
         return 2
-    _install_signal_handlers()
+    old_handlers = _install_signal_handlers()
+    try:
+        return _run(args)
+    finally:
+        _restore_signal_handlers(old_handlers)
+
+
+def _run(args) -> int:
     prog = f"splineimu {args.command}"
     try:
         return int(args._run(args) or 0)

@@ -2,7 +2,7 @@
 
 A record of N samples costs, per sample, about :data:`STREAM_BYTES` of memory when it is
 streamed to disk (the stamp arrays are whole), :data:`WHOLE_BYTES` when it is held whole (a
-ROS bag or the plots need the whole record; so does a scene's TUM file), and
+ROS bag or the plots need the whole record), :data:`TUM_BYTES` for a scene's TUM file, and
 :data:`DISK_BYTES` of disk for the output folder's text tables. :func:`check_record_fits`
 compares these with what the process can still allocate (the free memory of the machine and
 the address-space limit of the process, ``ulimit -v``) and with the free space where the
@@ -29,12 +29,14 @@ from .errors import ConfigError
 STREAM_BYTES = 48
 #: memory per sample held whole (IMU, ground truth with rotation matrices, noise, bag messages)
 WHOLE_BYTES = 1000
+#: memory per sample of a scene's poses written as a TUM file (held whole)
+TUM_BYTES = 300
 #: disk per sample: imu0/data.csv, state_groundtruth_estimate0/data.csv and groundtruth.tum
 DISK_BYTES = 450
 #: the share of the available memory a record may use
 MEMORY_SHARE = 0.8
 
-__all__ = ["available_memory_bytes", "free_disk_bytes", "check_record_fits", "STREAM_BYTES", "WHOLE_BYTES",
+__all__ = ["available_memory_bytes", "free_disk_bytes", "check_record_fits", "STREAM_BYTES", "WHOLE_BYTES", "TUM_BYTES",
            "DISK_BYTES"]
 
 
@@ -121,7 +123,7 @@ def check_record_fits(n_samples: int, *, rate_hz: float | None = None, whole: st
     span = f" ({n / rate_hz:.6g} s at {rate_hz:g} Hz)" if rate_hz else ""
     what = f"{n} IMU samples{span}"
     way = "use a shorter span (--duration), a lower --rate, or split the recording"
-    per = WHOLE_BYTES if (whole or tum) else STREAM_BYTES
+    per = WHOLE_BYTES if whole else TUM_BYTES if tum else STREAM_BYTES
     need = n * per
     avail = available_memory_bytes()
     if avail is not None and need > MEMORY_SHARE * avail:

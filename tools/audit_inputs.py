@@ -416,16 +416,16 @@ def cases() -> list:
         check=no_file("X"))
     add("output", "SIGTERM during --force replace", long_scene + ["--force"],
         setup=existing("X/keep.txt"), sig=(signal.SIGTERM, ".X.tmp-*/imu0/data.csv", 1.0))
-    add("output", "SIGTERM during scene --tum", ["scene", "static", "--duration", "20000", "--rate", "1000",
-                                                 "--tum", "p.tum"], sig=(signal.SIGTERM, ".p.tum.tmp-*", 1.0),
+    add("output", "SIGTERM during scene --tum", ["scene", "static", "--duration", "3000", "--rate", "1000",
+                                                 "--tum", "p.tum"], sig=(signal.SIGTERM, ".p.tum.tmp-*", 0.1),
         check=no_file("p.tum"))
     # ---------------------------------------------------- semantic traps
     add("semantic", "EuRoC imu stamps in integer seconds", ["integrate", "i.csv", "--init", "g.csv", "-o", "t.tum"],
         setup=lambda d: (_w(d, "i.csv", imu_csv_text(stamp=lambda i: str(1000 + i))),
                          _w(d, "g.csv", euroc_gt_text())), words=("second",))
-    add("semantic", "EuRoC ground truth in seconds", ["from-euroc", "g.csv", "-o", "out"],
+    add("semantic", "EuRoC ground truth in decimal seconds (read as s)", ["from-euroc", "g.csv", "-o", "out"],
         setup=lambda d: _w(d, "g.csv", euroc_gt_text(stamp=lambda i: f"{1400000000 + i * 0.01:.2f}")),
-        words=("second",))
+        expect="ok", check=file_has("out/report.json", r'"last_ns": 14000000029900000'))
     add("semantic", "EuRoC ground truth in integer seconds", ["from-euroc", "g.csv", "-o", "out"],
         setup=lambda d: _w(d, "g.csv", euroc_gt_text(stamp=lambda i: str(1400000000 + i))), words=("second",))
     add("semantic", "TUM stamps in milliseconds", ["from-tum", "p.tum", "-o", "out"],

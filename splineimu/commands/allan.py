@@ -46,7 +46,9 @@ def add_arguments(parser) -> None:
 def run(args) -> int:
     from ..allan import allan_output_paths, analyze_recording, write_allan_outputs
     from ..errors import ConfigError
+    from ..validation import positive_float
 
+    positive_float(args.points_per_decade, "--points-per-decade")
     if args.plot and not args.output:
         raise ConfigError("--plot needs -o DIR (the plot is written to DIR/allan.png)")
     if args.output:

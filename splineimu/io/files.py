@@ -97,7 +97,7 @@ def check_not_input(out, inputs=(), option: str = "-o") -> None:
     Examples
     --------
     >>> import tempfile, pathlib
-    >>> d = pathlib.Path(tempfile.mkdtemp()); _ = (d / "in.tum").write_text("1 0 0 0 0 0 0 1\n")
+    >>> d = pathlib.Path(tempfile.mkdtemp()); _ = (d / "in.tum").write_text("1 0 0 0 0 0 0 1\\n")
     >>> check_not_input(d / "." / "in.tum", [d / "in.tum"])
     Traceback (most recent call last):
     ...
@@ -181,8 +181,8 @@ def write_output_file(path, data, force: bool = False, inputs=(), option: str = 
     --------
     >>> import tempfile, pathlib
     >>> p = pathlib.Path(tempfile.mkdtemp()) / "sub" / "w.csv"
-    >>> write_output_file(p, "a,b\n").read_text()
-    'a,b\n'
+    >>> write_output_file(p, "a,b\\n").read_text()
+    'a,b\\n'
     """
     out = check_output_file(path, force, inputs, option)
     out.parent.mkdir(parents=True, exist_ok=True)

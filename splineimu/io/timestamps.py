@@ -217,7 +217,7 @@ def check_line_lengths(path, max_bytes: int = MAX_LINE_BYTES) -> None:
     --------
     >>> import tempfile, pathlib
     >>> p = pathlib.Path(tempfile.mkdtemp()) / "t.txt"
-    >>> _ = p.write_text("1 2\n" + "x" * 100 + "\n")
+    >>> _ = p.write_text("1 2\\n" + "x" * 100 + "\\n")
     >>> check_line_lengths(p, max_bytes=64)
     Traceback (most recent call last):
     ...
@@ -477,10 +477,16 @@ def read_timestamps(path, unit: str | None = None) -> np.ndarray:
     one_of(unit, "unit", (None, "ns", "s"))
     table = _read_first_column(path)
     stamps = table.stamps
+    guessed = unit is None
     if unit is None:
         unit = "ns" if all(_is_integer_text(s) for s in stamps) else "s"
     t_ns, _ = parse_stamps(stamps, unit, path=path, line_numbers=table.line_numbers)
     _check_increasing(t_ns, table.line_numbers, path)
+    if guessed and unit == "ns":
+        from .sniff import check_ns_spacing
+
+        check_ns_spacing(t_ns, path=path, advice="integer stamps are read as nanoseconds: give nanoseconds, "
+                         "or seconds with a decimal point (1.0)")
     return t_ns
 
 
