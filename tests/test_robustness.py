@@ -6,7 +6,6 @@ from __future__ import annotations
 import math
 import os
 
-import numpy as np
 import pytest
 
 from splineimu.errors import ConfigError, InputError, OutputExistsError, SplineImuError
@@ -214,7 +213,8 @@ def test_record_too_large_is_refused_before_allocating(monkeypatch):
     check_record_fits(10_000, rate_hz=200.0)
     monkeypatch.setattr(res, "available_memory_bytes", lambda: 3 * 10**9)  # as under `ulimit -v 3000000`
     job = SynthesisJob(SceneInput("static", duration_s=500000), ImuOptions(rate_hz=1000), OutputOptions("never"))
-    with pytest.raises(ConfigError, match=r"500000001 IMU samples \(500000 s at 1000 Hz\) need about 24 GB of memory, 3 GB"):
+    need = r"500000001 IMU samples \(500000 s at 1000 Hz\) need about 24 GB of memory, 3 GB"
+    with pytest.raises(ConfigError, match=need):
         run_job(job)
     with pytest.raises(ConfigError, match="--bag holds the whole record"):
         check_record_fits(10**10, rate_hz=1000.0, whole="--bag")
