@@ -409,6 +409,21 @@ def cases() -> list:
         words=("symlink|link",))
     add("output", "scene -o symlink to a folder", ["scene", "static", "--duration", "1", "-o", "link", "--force"],
         setup=lambda d: (existing("victim/keep.txt")(d), os.symlink("victim", d / "link")), words=("link",))
+    add("output", "from-tum -o the folder holding the input --force", ["from-tum", "in/p.tum", "-o", "in", "--force"],
+        setup=lambda d: _w(d, "in/p.tum", tum_text()), words=("input",))
+    add("output", "preintegrate -o its ground truth --force",
+        ["preintegrate", "base", "-o", "base/state_groundtruth_estimate0/data.csv", "--force"], setup=base,
+        words=("input",))
+    add("output", "calibrate -o holding a symlinked calibration.yaml", ["calibrate", "accel", "base/imu0/data.csv",
+                                                                         "-o", "cal"],
+        setup=lambda d: (base(d), existing("victim.yaml")(d), (d / "cal").mkdir(),
+                         os.symlink("../victim.yaml", d / "cal" / "calibration.yaml")), words=("link",))
+    add("output", "scene --bag ros2 with stamps past 2038", ["scene", "static", "--duration", "1", "--t0-ns",
+                                                             "4500000000000000000", "--bag", "ros2", "-o", "out"],
+        words=("2038|2\\*\\*31",))
+    add("output", "scene --bag ros1 with stamps past 2106", ["scene", "static", "--duration", "1", "--t0-ns",
+                                                             "4500000000000000000", "--bag", "ros1", "-o", "out"],
+        words=("2\\*\\*32",))
     long_scene = ["scene", "static", "--duration", "3000", "--imu", "adis16448", "--seed", "1", "-o", "X"]
     add("output", "SIGTERM during a long write", long_scene, sig=(signal.SIGTERM, ".X.tmp-*/imu0/data.csv", 1.0),
         check=no_file("X"))
@@ -462,6 +477,11 @@ def cases() -> list:
     add("semantic", "--timestamps seconds in a ns column", ["scene", "static", "--duration", "5", "--timestamps",
                                                             "s.csv", "-o", "out"],
         setup=lambda d: _w(d, "s.csv", "\n".join(str(i) for i in range(5)) + "\n"), words=("second",))
+    add("semantic", "compare a trajectory with itself: zero error", ["compare", "base/poses.tum", "base/poses.tum"],
+        setup=base, expect="ok", check=out_has(r"rmse\s+0(\.0+)?\s"))
+    add("semantic", "scene file error names the file and line", ["run", "s.yaml"],
+        setup=scene_file("motion: {scene: static}\nimu:\n  rate_hz: 200\n  sampling: average\noutput: {dir: out}\n"),
+        words=(r"s\.yaml:4",))
     add("semantic", "same command twice: same bytes", ["scene", "ellipse", "--duration", "2", "--imu", "adis16448",
                                                        "--seed", "3", "-o", "b"],
         setup=lambda d: subprocess.run([sys.executable, "-m", "splineimu", "scene", "ellipse", "--duration", "2",

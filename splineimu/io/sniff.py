@@ -108,6 +108,9 @@ def _unit_of(magnitude: float, step: float) -> str:
 def check_ns_spacing(t_ns, *, path=None, line=None, advice: str = "") -> None:
     """Refuse nanosecond stamps whose median spacing is below a microsecond (above 1 MHz).
 
+    Two stamps are judged only when their magnitude says they are not nanoseconds (a 1.4e9
+    "ns" stamp is 1.4 s after 1970, but 1.4e9 seconds is 2014).
+
     Raises
     ------
     InputError
@@ -124,9 +127,10 @@ def check_ns_spacing(t_ns, *, path=None, line=None, advice: str = "") -> None:
     if t.size < 2:
         return
     step = float(np.median(np.diff(t)))
-    if step <= 0 or step >= 1000:
+    magnitude = float(np.max(np.abs(t)))
+    if step <= 0 or step >= 1000 or (t.size < 3 and magnitude < 1e8):  # two small stamps: too few to judge
         return
-    unit = _unit_of(float(np.max(np.abs(t))), step)
+    unit = _unit_of(magnitude, step)
     raise InputError(f"stamps step by {step:g} ns ({1e9 / step:.3g} Hz): they look like {unit}, not nanoseconds"
                      + (f"; {advice}" if advice else ""), path=path, line=line)
 

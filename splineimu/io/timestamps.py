@@ -452,8 +452,9 @@ def read_timestamps(path, unit: str | None = None) -> np.ndarray:
     unit : {None, "ns", "s"}, default None
         Unit of the numbers. ``None`` decides from the text: if any stamp has a decimal
         point or an exponent, all are seconds (parsed exactly, as in
-        :func:`parse_stamps`); if all are plain integers they are nanoseconds -- even when
-        they are small (integer seconds such as ``0 1 2`` need ``unit="s"``).
+        :func:`parse_stamps`); if all are plain integers they are nanoseconds, and stamps
+        that then step by less than a microsecond are refused as what they look like
+        (integer seconds such as ``0 1 2`` need ``unit="s"``).
 
     Returns
     -------
@@ -463,8 +464,9 @@ def read_timestamps(path, unit: str | None = None) -> np.ndarray:
     Raises
     ------
     InputError
-        Unreadable file, no rows, a stamp that is not a number, or stamps that are not
-        strictly increasing (naming the line and the previous one).
+        Unreadable file, no rows, a stamp that is not a number, stamps that are not
+        strictly increasing (naming the line and the previous one), or integer stamps
+        that step by less than 1 us (seconds or milliseconds read as nanoseconds).
 
     Examples
     --------
