@@ -54,10 +54,15 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
+    from pathlib import Path
+
     from ..io.files import check_output_file, write_output_file
     from ..preintegration import evaluate_recording
 
-    inputs = [args.out_folder, args.imu_csv, args.groundtruth, args.stamps]
+    folder = Path(args.out_folder)
+    inputs = [args.imu_csv, args.stamps, args.imu, args.groundtruth, folder / "imu.yaml"]
+    inputs += [base / sub / "data.csv" for base in (folder, folder / "mav0")  # the defaults, either layout
+               for sub in ("imu0", "state_groundtruth_estimate0")]
     if args.output:
         check_output_file(args.output, args.force, inputs=inputs)
     res = evaluate_recording(args.out_folder, imu_csv=args.imu_csv, groundtruth=args.groundtruth,
