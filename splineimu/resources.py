@@ -108,7 +108,7 @@ def check_record_fits(n_samples: int, *, rate_hz: float | None = None, whole: st
     rate_hz : float, optional
         Their rate, for the message.
     whole : str, optional
-        Why the record is held whole, e.g. ``"--bag"`` (None: it is streamed).
+        What the record is held whole for, e.g. ``"--bag"`` (None: it is streamed).
     out_dir : path-like, optional
         The output folder (its free disk space is checked).
     tum : path-like, optional
@@ -127,7 +127,7 @@ def check_record_fits(n_samples: int, *, rate_hz: float | None = None, whole: st
     need = n * per
     avail = available_memory_bytes()
     if avail is not None and need > MEMORY_SHARE * avail:
-        held = f"; {whole or '--tum'} holds the whole record in memory (drop it to stream)" if (whole or tum) else ""
+        held = f"; the whole record is held in memory for {whole or '--tum'}" if (whole or tum) else ""
         raise ConfigError(f"{what} need about {_gb(need)} of memory, {_gb(avail)} are available{held}; {way}")
     if n_samples * STREAM_BYTES > 2**62:  # absurd even with unlimited memory
         raise ConfigError(f"{what} are too many; {way}")

@@ -216,7 +216,7 @@ def test_record_too_large_is_refused_before_allocating(monkeypatch):
     need = r"500000001 IMU samples \(500000 s at 1000 Hz\) need about 24 GB of memory, 3 GB"
     with pytest.raises(ConfigError, match=need):
         run_job(job)
-    with pytest.raises(ConfigError, match="--bag holds the whole record"):
+    with pytest.raises(ConfigError, match="whole record is held in memory for --bag"):
         check_record_fits(10**10, rate_hz=1000.0, whole="--bag")
     assert not os.path.exists("never")
 

@@ -38,7 +38,7 @@ def test_signal_during_a_long_write_leaves_nothing(tmp_path, sig, code):
     p = _start(["scene", "static", "--duration", "3000", "--imu", "adis16448", "--seed", "1", "-o", "X", "--force"],
                tmp_path)
     deadline = time.monotonic() + 240
-    while not list(tmp_path.glob(".X.tmp-*/imu0/data.csv")) and p.poll() is None and time.monotonic() < deadline:
+    while not list(tmp_path.glob(".X.tmp-*/**/imu0/data.csv")) and p.poll() is None and time.monotonic() < deadline:
         time.sleep(0.05)
     assert p.poll() is None, "finished before the signal could be sent"
     os.kill(p.pid, sig)

@@ -40,8 +40,8 @@ VALID["timestamps"] = VALID["imu_csv"]
 VALID["yaml"] = VALID["scene"]
 
 TOKENS = [b"nan", b"inf", b"-inf", b"-1", b"0", b"1e400", b"", b"\x00", b"\xff\xfe", b"&a", b"*a", b"[[[[", b"{",
-          b":", b",", b" ", b"\n", b"\t", b"#", b"1" * 30, b"-", b".", b"e", b"null", b"~", b"!!python/object:os.system",
-          b"%YAML:1.0\n", b"---\n", b"'", b'"', b"\r\n"]
+          b":", b",", b" ", b"\n", b"\t", b"#", b"1" * 30, b"-", b".", b"e", b"null", b"~",
+          b"!!python/object:os.system", b"%YAML:1.0\n", b"---\n", b"'", b'"', b"\r\n"]
 
 
 @st.composite

@@ -149,10 +149,12 @@ def base(d: Path):
 
 
 CACHE = Path()
+IMU_CSV = "base/imu0/data.csv"  # set by make_cache: the layout of the output folder
+GT_CSV = "base/state_groundtruth_estimate0/data.csv"
 
 
 def make_cache(root: Path, py: str, env: dict):
-    global CACHE
+    global CACHE, IMU_CSV, GT_CSV
     CACHE = root / "cache"
     CACHE.mkdir(parents=True, exist_ok=True)
     if not (CACHE / "base" / "report.json").exists():
@@ -161,6 +163,9 @@ def make_cache(root: Path, py: str, env: dict):
                        env=env, check=True, capture_output=True)
         shutil.move(str(CACHE / "base.tum"), str(CACHE / "base" / "poses.tum"))
     big_line(root, "big_probe.txt")
+    found = sorted(str(p.relative_to(CACHE)) for p in (CACHE / "base").rglob("imu0/data.csv"))
+    IMU_CSV = found[0]
+    GT_CSV = IMU_CSV.replace("imu0/data.csv", "state_groundtruth_estimate0/data.csv")
 
 
 # ------------------------------------------------------------------ checks
@@ -324,9 +329,9 @@ def cases() -> list:
     add("input", "integrate: missing csv", ["integrate", "nope.csv", "-o", "t.tum"], words=("nope",))
     add("input", "integrate: 4 columns", ["integrate", "i.csv", "-o", "t.tum"],
         setup=lambda d: _w(d, "i.csv", "\n".join(",".join(ln.split(",")[:4]) for ln in imu_csv_text().splitlines())))
-    add("input", "integrate: NaN sample", ["integrate", "base/imu0/data.csv", "-o", "t.tum"],
-        setup=lambda d: (base(d), _nan_row(d / "base/imu0/data.csv")), words=(r":\d+:",))
-    add("input", "integrate: --init missing", ["integrate", "base/imu0/data.csv", "--init", "nope.csv", "-o", "t.tum"],
+    add("input", "integrate: NaN sample", ["integrate", IMU_CSV, "-o", "t.tum"],
+        setup=lambda d: (base(d), _nan_row(d / IMU_CSV)), words=(r":\d+:",))
+    add("input", "integrate: --init missing", ["integrate", IMU_CSV, "--init", "nope.csv", "-o", "t.tum"],
         setup=base, words=("nope",))
     add("input", "integrate: random bytes", ["integrate", "i.csv", "-o", "t.tum"],
         setup=lambda d: _w(d, "i.csv", os.urandom(3000)))
@@ -337,9 +342,9 @@ def cases() -> list:
         setup=lambda d: (base(d), _w(d, "s.csv", "a\nb\n")), words=(r"s\.csv",))
     add("input", "allan: empty csv", ["allan", "i.csv"], setup=lambda d: _w(d, "i.csv", ""))
     add("input", "allan: 10 samples", ["allan", "i.csv"], setup=lambda d: _w(d, "i.csv", imu_csv_text(10)))
-    add("input", "allan: --points-per-decade 0", ["allan", "base/imu0/data.csv", "--points-per-decade", "0"],
+    add("input", "allan: --points-per-decade 0", ["allan", IMU_CSV, "--points-per-decade", "0"],
         setup=base, words=("points-per-decade",))
-    add("input", "allan: --rate -1", ["allan", "base/imu0/data.csv", "--rate", "-1"], setup=base, words=("rate",))
+    add("input", "allan: --rate -1", ["allan", IMU_CSV, "--rate", "-1"], setup=base, words=("rate",))
     add("input", "allan: .rda garbage", ["allan", "x.rda"], setup=lambda d: _w(d, "x.rda", os.urandom(500)))
     add("input", "compare: missing est", ["compare", "nope.tum", "base/poses.tum"], setup=base, words=("nope",))
     add("input", "compare: no common stamps", ["compare", "a.tum", "b.tum"],
@@ -350,8 +355,8 @@ def cases() -> list:
         setup=lambda d: _w(d, "a.tum", tum_text()), words=("t.max.diff",))
     add("input", "calibrate: random bytes", ["calibrate", "accel", "i.csv"],
         setup=lambda d: _w(d, "i.csv", os.urandom(3000)))
-    add("input", "calibrate: moving data", ["calibrate", "accel", "base/imu0/data.csv"], setup=base)
-    add("input", "calibrate: --window 0", ["calibrate", "accel", "base/imu0/data.csv", "--window", "0"],
+    add("input", "calibrate: moving data", ["calibrate", "accel", IMU_CSV], setup=base)
+    add("input", "calibrate: --window 0", ["calibrate", "accel", IMU_CSV, "--window", "0"],
         setup=base, words=("window",))
     add("input", "calibrate: no sensor", ["calibrate"], expect="error")
 
@@ -390,7 +395,7 @@ def cases() -> list:
     add("output", "-o empty string", ["scene", "static", "--duration", "1", "-o", ""])
     add("output", "existing folder, no --force", ["scene", "static", "--duration", "1", "-o", "out"],
         setup=existing("out/keep.txt"), words=("force",))
-    add("output", "integrate -o existing file", ["integrate", "base/imu0/data.csv", "-o", "t.tum"],
+    add("output", "integrate -o existing file", ["integrate", IMU_CSV, "-o", "t.tum"],
         setup=lambda d: (base(d), existing("t.tum")(d)), words=("force",))
     add("output", "preintegrate -o existing file", ["preintegrate", "base", "-o", "w.csv"],
         setup=lambda d: (base(d), existing("w.csv")(d)), words=("force",))
@@ -398,13 +403,13 @@ def cases() -> list:
         setup=existing("p.tum"), words=("force",))
     add("output", "compare --plot existing file", ["compare", "base/poses.tum", "base/poses.tum", "--plot", "c.png"],
         setup=lambda d: (base(d), existing("c.png")(d)), words=("force",))
-    add("output", "allan -o existing allan.yaml", ["allan", "base/imu0/data.csv", "-o", "al"],
+    add("output", "allan -o existing allan.yaml", ["allan", IMU_CSV, "-o", "al"],
         setup=lambda d: (base(d), existing("al/allan.yaml")(d)), words=("force",))
-    add("output", "integrate -o its input --force", ["integrate", "base/imu0/data.csv", "-o", "base/imu0/data.csv",
+    add("output", "integrate -o its input --force", ["integrate", IMU_CSV, "-o", IMU_CSV,
                                                       "--force"], setup=base, words=("input",))
     add("output", "from-tum -o its input --force", ["from-tum", "p.tum", "-o", "p.tum", "--force"], setup=good_tum,
         words=("input",))
-    add("output", "integrate -o symlink", ["integrate", "base/imu0/data.csv", "-o", "link.tum", "--force"],
+    add("output", "integrate -o symlink", ["integrate", IMU_CSV, "-o", "link.tum", "--force"],
         setup=lambda d: (base(d), existing("victim.tum")(d), os.symlink("victim.tum", d / "link.tum")),
         words=("symlink|link",))
     add("output", "scene -o symlink to a folder", ["scene", "static", "--duration", "1", "-o", "link", "--force"],
@@ -412,9 +417,9 @@ def cases() -> list:
     add("output", "from-tum -o the folder holding the input --force", ["from-tum", "in/p.tum", "-o", "in", "--force"],
         setup=lambda d: _w(d, "in/p.tum", tum_text()), words=("input",))
     add("output", "preintegrate -o its ground truth --force",
-        ["preintegrate", "base", "-o", "base/state_groundtruth_estimate0/data.csv", "--force"], setup=base,
+        ["preintegrate", "base", "-o", GT_CSV, "--force"], setup=base,
         words=("input",))
-    add("output", "calibrate -o holding a symlinked calibration.yaml", ["calibrate", "accel", "base/imu0/data.csv",
+    add("output", "calibrate -o holding a symlinked calibration.yaml", ["calibrate", "accel", IMU_CSV,
                                                                          "-o", "cal"],
         setup=lambda d: (base(d), existing("victim.yaml")(d), (d / "cal").mkdir(),
                          os.symlink("../victim.yaml", d / "cal" / "calibration.yaml")), words=("link",))
@@ -425,12 +430,12 @@ def cases() -> list:
                                                              "4500000000000000000", "--bag", "ros1", "-o", "out"],
         words=("2\\*\\*32",))
     long_scene = ["scene", "static", "--duration", "3000", "--imu", "adis16448", "--seed", "1", "-o", "X"]
-    add("output", "SIGTERM during a long write", long_scene, sig=(signal.SIGTERM, ".X.tmp-*/imu0/data.csv", 1.0),
+    add("output", "SIGTERM during a long write", long_scene, sig=(signal.SIGTERM, ".X.tmp-*/**/imu0/data.csv", 1.0),
         check=no_file("X"))
-    add("output", "SIGINT during a long write", long_scene, sig=(signal.SIGINT, ".X.tmp-*/imu0/data.csv", 1.0),
+    add("output", "SIGINT during a long write", long_scene, sig=(signal.SIGINT, ".X.tmp-*/**/imu0/data.csv", 1.0),
         check=no_file("X"))
     add("output", "SIGTERM during --force replace", long_scene + ["--force"],
-        setup=existing("X/keep.txt"), sig=(signal.SIGTERM, ".X.tmp-*/imu0/data.csv", 1.0))
+        setup=existing("X/keep.txt"), sig=(signal.SIGTERM, ".X.tmp-*/**/imu0/data.csv", 1.0))
     add("output", "SIGTERM during scene --tum", ["scene", "static", "--duration", "3000", "--rate", "1000",
                                                  "--tum", "p.tum"], sig=(signal.SIGTERM, ".p.tum.tmp-*", 0.1),
         check=no_file("p.tum"))
@@ -449,9 +454,9 @@ def cases() -> list:
         setup=tum_with(lambda: tum_text(scale=1e9, fmt="{:.0f}")), words=("nanosecond",))
     add("semantic", "TUM file given to from-euroc", ["from-euroc", "p.tum", "-o", "out"], setup=good_tum,
         words=("TUM",))
-    add("semantic", "EuRoC imu csv given as poses", ["from-tum", "base/imu0/data.csv", "-o", "out"], setup=base,
+    add("semantic", "EuRoC imu csv given as poses", ["from-tum", IMU_CSV, "-o", "out"], setup=base,
         words=("IMU|imu",))
-    add("semantic", "EuRoC imu csv given to from-euroc", ["from-euroc", "base/imu0/data.csv", "-o", "out"],
+    add("semantic", "EuRoC imu csv given to from-euroc", ["from-euroc", IMU_CSV, "-o", "out"],
         setup=base, words=("IMU|imu",))
     add("semantic", "EuRoC ground truth given to from-tum", ["from-tum", "g.csv", "-o", "out"],
         setup=lambda d: _w(d, "g.csv", euroc_gt_text()), words=("EuRoC|from-euroc",))

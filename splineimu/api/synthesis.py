@@ -161,6 +161,7 @@ def _fits(job, n, write, tum=False):
 
     out = job.output
     whole = " and ".join(f for f, on in (("--bag", out.bag), ("--plot", out.plot)) if on and write) or None
+    whole = whole if write else "the in-memory result"
     check_record_fits(n, rate_hz=job.imu.rate_hz if job.imu.timestamps is None else None, whole=whole,
                       out_dir=out.dir if write else None, tum=out.tum if tum else None)
 

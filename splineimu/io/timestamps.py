@@ -255,16 +255,8 @@ def _probe_lines(mm, size, max_bytes, path):
 
 
 def _read_lines(path) -> list[str]:
-    check_line_lengths(path)
-    p = Path(path)
-    try:
-        raw = p.read_bytes()
-    except FileNotFoundError:
-        raise InputError("file not found", path=path) from None
-    except IsADirectoryError:
-        raise InputError("is a folder, expected a file", path=path) from None
-    except PermissionError:
-        raise InputError("permission denied", path=path) from None
+    check_line_lengths(path)  # also: missing, a folder, no permission (one-line errors)
+    raw = Path(path).read_bytes()
     if b"\x00" in raw[:4096]:
         raise InputError("looks like a binary file, expected text", path=path)
     text = raw.decode("utf-8-sig", errors="replace")
