@@ -115,12 +115,25 @@ def _os_error_text(exc: OSError) -> str:
 
 
 def main(argv=None) -> int:
+    """Run the command line; returns the exit code.
+
+    Every error a user can cause ends as one line on stderr and exit code 1 (errors of the
+    splineimu family, OS errors on inputs and outputs, memory and nesting limits); Ctrl-C
+    exits with 130. Run as the program (``argv`` None), SIGTERM and SIGHUP unwind like Ctrl-C,
+    so temporary outputs are removed, and exit with 128 + the signal number.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        The arguments (default: ``sys.argv[1:]``).
+    """
     parser = build_parser()
     args = parser.parse_args(argv)
     if not getattr(args, "_run", None):
         parser.print_help()
         return 2
-    old_handlers = _install_signal_handlers()
+    # the program itself (not main() called in-process, e.g. by tests): SIGTERM cleans up like Ctrl-C
+    old_handlers = _install_signal_handlers() if argv is None else {}
     try:
         return _run(args)
     finally:
