@@ -149,9 +149,13 @@ def _input_files(job) -> list:
 
 
 def _seed(job):
-    """A given seed, or (with a sensor model) a fresh one that is reported so that the run can be repeated."""
-    if job.imu.seed is not None or job.imu.imu_config is None:
-        return job.imu.seed
+    """A given seed, or (with something random: a sensor model, stamp noise, losses, vibration) a
+    fresh one that is reported so that the run can be repeated."""
+    imu = job.imu
+    timing = imu.timing
+    random_timing = timing is not None and (timing.stamp_noise_s > 0 or timing.drop_probability > 0)
+    if imu.seed is not None or not (imu.imu_config is not None or random_timing or imu.vibration is not None):
+        return imu.seed
     return int(np.random.SeedSequence().entropy % (2**63))
 
 
@@ -166,11 +170,23 @@ def _fits(job, n, write, tum=False):
                       out_dir=out.dir if write else None, tum=out.tum if tum else None)
 
 
-def _stamps(job, first_ns: int, last_ns: int, log, write=True):
+def _stamps(job, first_ns: int, last_ns: int, log, seed=None, write=True):
+    """The stamps: a grid at ``rate_hz``, the given ``timestamps``, or (with a timing model) the
+    :class:`~splineimu.imu.timing.SampleTimes` of the IMU's clock."""
+    if job.imu.timestamps is None:  # a grid: refuse what cannot fit before allocating it
+        _fits(job, int((last_ns - first_ns) * job.imu.rate_hz / 1e9) + 1, write)
+    if job.imu.timing is not None:
+        from ..pipeline import TIMING_SEED_KEY, child_seed
+
+        st = job.imu.timing.sample_times(first_ns, last_ns, job.imu.rate_hz, rng=child_seed(seed, TIMING_SEED_KEY))
+        if st.index.size == 0:
+            raise ConfigError("every sample was dropped: lower `drop_probability`", option="timing.drop_probability")
+        log.line(f"timing        {st.n_dropped} of {st.n_taken} samples dropped; stamps on the IMU clock "
+                 f"({', '.join(f'{k} {v:g}' for k, v in st.model.items())})")
+        return st
     if job.imu.timestamps is None:
         from ..timegrid import uniform_stamps_ns
 
-        _fits(job, int((last_ns - first_ns) * job.imu.rate_hz / 1e9) + 1, write)
         return uniform_stamps_ns(first_ns, last_ns, job.imu.rate_hz)
     from ..io.timestamps import read_timestamps
 
@@ -192,7 +208,7 @@ def _synthesize(job, source, t_ns, seed, out_dir, report, write, result, force=N
     imu = job.imu
     syn = synthesize_stream(source, t_ns, gravity=imu.gravity, extrinsic=imu.body_T_sensor,
                             imu_config=imu.imu_config, seed=seed, sampling=imu.sampling,
-                            with_increments=imu.increments)
+                            with_increments=imu.increments, vibration=imu.vibration)
     if write:
         result.report = write_output(syn, out_dir, force=job.output.force if force is None else force, report=report,
                                      bag=job.output.bag, plot=job.output.plot, fit_data=fit_data)
@@ -220,11 +236,11 @@ def synthesize_scene(job: SynthesisJob, *, echo=None, write: bool = True) -> Syn
         log.line(f"poses         {job.output.tum} ({job.imu.rate_hz:g} Hz)")
     if write and job.output.dir is None:
         return result
-    t_ns = _stamps(job, scene.origin_ns, scene.origin_ns + int(round(scene.t_max_s * 1e9)), log, write)
     seed = _seed(job)
+    t_ns = _stamps(job, scene.origin_ns, scene.origin_ns + int(round(scene.t_max_s * 1e9)), log, seed, write)
     _synthesize(job, scene, t_ns, seed, job.output.dir, scene_report(scene, job), write, result)
     log.line(f"scene         {m.name}, {scene.t_max_s:g} s")
-    log.line(imu_line(t_ns, job, seed))
+    log.line(imu_line(getattr(t_ns, "stamp_ns", t_ns), job, seed))
     if write:
         log.line(f"written       {job.output.dir}  ({time.perf_counter() - t_wall:.2f} s)")
     return result
@@ -320,8 +336,8 @@ def _one(job, track, out_dir, gaps, max_gap, write, result, log):
                              for i, w in zip(rep.dropped_poses, where)]
         log.line(f"outliers      {len(where)} poses dropped (lines {', '.join(map(str, where[:8]))}"
                  f"{', ...' if len(where) > 8 else ''}); --keep-outliers keeps them")
-    t_ns = _stamps(job, int(track.t_ns[0]), int(track.t_ns[-1]), log, write)
     seed = _seed(job)
+    t_ns = _stamps(job, int(track.t_ns[0]), int(track.t_ns[-1]), log, seed, write)
     fit_data = _fit_residuals(spl, t_s, track) if (write and job.output.plot) else None
     report = poses_report(job, track, rep, gaps, max_gap)
     _synthesize(job, spl, t_ns, seed, out_dir, report, write, result, force=job.output.force if not quiet else False,
@@ -329,7 +345,7 @@ def _one(job, track, out_dir, gaps, max_gap, write, result, log):
     if not quiet:
         for text in fit_lines(rep, gaps, max_gap):
             log.line(text)
-        log.line(imu_line(t_ns, job, seed, detailed=True))
+        log.line(imu_line(getattr(t_ns, "stamp_ns", t_ns), job, seed, detailed=True))
     return result
 
 
