@@ -31,6 +31,9 @@
       plot: true
       force: false
       tum: poses.tum              # scenes only: their poses at the IMU rate
+    cameras: {cam0: {...}}        # optional: Kalibr camchain keys per camera, or {file: camchain.yaml}
+    landmarks: {random: {count: 1500, shape: shell}}   # with cameras; or {file: points.csv}
+                                  # (keys and files: splineimu.camera.config)
 
 The file builds a :class:`~splineimu.api.options.SynthesisJob`, the same object the command-line
 flags build; every value is checked with the file and line it stands on. Only what the file
@@ -60,7 +63,7 @@ from .options import ImuOptions, OutputOptions, PosesInput, SceneInput, SplineOp
 
 #: Keys of each section (the file's structure).
 KEYS = {
-    (): ("motion", "imu", "seed", "output"),
+    (): ("motion", "imu", "seed", "output", "cameras", "landmarks"),
     ("motion",): ("scene", "duration_s", "t0_ns", "params", "poses", "format", "spline", "gaps", "max_gap_s",
                   "repeated_stamps"),
     ("motion", "spline"): ("kind", "order", "knot_spacing_s", "smoothness", "keep_outliers"),
@@ -164,8 +167,11 @@ def load_scene_file(path) -> SynthesisJob:
                       extra={"seed": ("seed",)})
     output = _build(OutputOptions, doc, out, ("output",), ("dir", "force", "bag", "plot", "tum"))
     try:
-        return SynthesisJob(source, imu_opts, output)
+        return SynthesisJob(source, imu_opts, output, cameras=top.get("cameras"), landmarks=top.get("landmarks"),
+                            origin=YamlOrigin(doc, {"cameras": ("cameras",), "landmarks": ("landmarks",)}))
     except ConfigError as exc:
+        if exc.path is not None:  # cameras and landmarks: at their file and line already
+            raise
         raise ConfigError(exc.problem, path=doc.name, option=exc.option) from None
 
 
