@@ -35,7 +35,7 @@ def _leftovers(d: Path):
 def test_signal_during_a_long_write_leaves_nothing(tmp_path, sig, code):
     (tmp_path / "X").mkdir()
     (tmp_path / "X" / "keep.txt").write_text("before")
-    p = _start(["scene", "static", "--duration", "3000", "--imu", "adis16448", "--seed", "1", "-o", "X", "--force"],
+    p = _start(["scene", "static", "--duration", "30000", "--imu", "adis16448", "--seed", "1", "-o", "X", "--force"],
                tmp_path)
     deadline = time.monotonic() + 240
     while not list(tmp_path.glob(".X.tmp-*/**/imu0/data.csv")) and p.poll() is None and time.monotonic() < deadline:

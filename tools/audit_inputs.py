@@ -429,13 +429,13 @@ def cases() -> list:
     add("output", "scene --bag ros1 with stamps past 2106", ["scene", "static", "--duration", "1", "--t0-ns",
                                                              "4500000000000000000", "--bag", "ros1", "-o", "out"],
         words=("2\\*\\*32",))
-    long_scene = ["scene", "static", "--duration", "3000", "--imu", "adis16448", "--seed", "1", "-o", "X"]
-    add("output", "SIGTERM during a long write", long_scene, sig=(signal.SIGTERM, ".X.tmp-*/**/imu0/data.csv", 1.0),
+    long_scene = ["scene", "static", "--duration", "30000", "--imu", "adis16448", "--seed", "1", "-o", "X"]
+    add("output", "SIGTERM during a long write", long_scene, sig=(signal.SIGTERM, ".X.tmp-*/**/imu0/data.csv", 0.3),
         check=no_file("X"))
-    add("output", "SIGINT during a long write", long_scene, sig=(signal.SIGINT, ".X.tmp-*/**/imu0/data.csv", 1.0),
+    add("output", "SIGINT during a long write", long_scene, sig=(signal.SIGINT, ".X.tmp-*/**/imu0/data.csv", 0.3),
         check=no_file("X"))
     add("output", "SIGTERM during --force replace", long_scene + ["--force"],
-        setup=existing("X/keep.txt"), sig=(signal.SIGTERM, ".X.tmp-*/**/imu0/data.csv", 1.0))
+        setup=existing("X/keep.txt"), sig=(signal.SIGTERM, ".X.tmp-*/**/imu0/data.csv", 0.3))
     add("output", "SIGTERM during scene --tum", ["scene", "static", "--duration", "3000", "--rate", "1000",
                                                  "--tum", "p.tum"], sig=(signal.SIGTERM, ".p.tum.tmp-*", 0.1),
         check=no_file("p.tum"))
