@@ -57,23 +57,115 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM (or SIGHUP) arrived: unwinds like Ctrl-C, so that temporary outputs are removed."""
+
+    def __init__(self, signum: int):
+        super().__init__(signum)
+        self.signum = signum
+
+
+def _raise_terminated(signum, frame):
+    raise Terminated(signum)
+
+
+def _install_signal_handlers() -> dict:
+    """SIGTERM and SIGHUP raise :class:`Terminated` (a KeyboardInterrupt, as SIGINT raises);
+    the ``with`` blocks of the atomic outputs then remove their temporaries. Returns the
+    handlers replaced, for :func:`_restore_signal_handlers`."""
+    import signal
+
+    old = {}
+    for name in ("SIGTERM", "SIGHUP"):
+        sig = getattr(signal, name, None)
+        if sig is not None and signal.getsignal(sig) in (signal.SIG_DFL, None):
+            try:
+                old[sig] = signal.signal(sig, _raise_terminated)
+            except ValueError:  # not the main thread (main() called from a library user's thread)
+                break
+    return old
+
+
+def _restore_signal_handlers(old: dict) -> None:
+    import signal
+
+    for sig, handler in old.items():
+        signal.signal(sig, handler)
+
+
+def _os_error_text(exc: OSError) -> str:
+    """One line for an OSError: the path(s) and the system's words, and what to do."""
+    import errno
+
+    what = exc.strerror or type(exc).__name__
+    paths = [p for p in (exc.filename, exc.filename2) if p is not None]
+    where = " -> ".join(f"'{os.fsdecode(p)}'" for p in paths)
+    hint = {
+        errno.EACCES: "check the permissions of that folder or choose another -o",
+        errno.EPERM: "check the permissions of that folder or choose another -o",
+        errno.EROFS: "the filesystem is read-only; choose another -o",
+        errno.ENOSPC: "the disk is full; free space or choose another -o",
+        errno.EDQUOT: "the disk quota is exceeded; free space or choose another -o",
+        errno.ENAMETOOLONG: "use a shorter name",
+        errno.ENOTDIR: "a part of the path is a file, not a folder",
+        errno.ENOENT: "check the path",
+        errno.EISDIR: "that is a folder; give a file",
+    }.get(exc.errno)
+    return f"{where + ': ' if where else ''}{what}" + (f" ({hint})" if hint else "")
+
+
 def main(argv=None) -> int:
+    """Run the command line; returns the exit code.
+
+    Every error a user can cause ends as one line on stderr and exit code 1 (errors of the
+    splineimu family, OS errors on inputs and outputs, memory and nesting limits); Ctrl-C
+    exits with 130. Run as the program (``argv`` None), SIGTERM and SIGHUP unwind like Ctrl-C,
+    so temporary outputs are removed, and exit with 128 + the signal number.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        The arguments (default: ``sys.argv[1:]``).
+    """
     parser = build_parser()
     args = parser.parse_args(argv)
     if not getattr(args, "_run", None):
         parser.print_help()
         return 2
+    # the program itself (not main() called in-process, e.g. by tests): SIGTERM cleans up like Ctrl-C
+    old_handlers = _install_signal_handlers() if argv is None else {}
+    try:
+        return _run(args)
+    finally:
+        _restore_signal_handlers(old_handlers)
+
+
+def _run(args) -> int:
+    prog = f"splineimu {args.command}"
     try:
         return int(args._run(args) or 0)
     except SplineImuError as exc:
-        print(f"splineimu {args.command}: error: {exc}", file=sys.stderr)
+        print(f"{prog}: error: {exc}", file=sys.stderr)
         return 1
+    except Terminated as exc:
+        print(f"{prog}: terminated (signal {exc.signum}); nothing partial was left", file=sys.stderr)
+        return 128 + exc.signum
     except KeyboardInterrupt:
-        print("splineimu: interrupted", file=sys.stderr)
+        print(f"{prog}: interrupted; nothing partial was left", file=sys.stderr)
         return 130
     except BrokenPipeError:  # e.g. `splineimu allan ... | head`
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
+        return 1
+    except OSError as exc:
+        print(f"{prog}: error: {_os_error_text(exc)}", file=sys.stderr)
+        return 1
+    except MemoryError:
+        print(f"{prog}: error: out of memory; try a shorter span, a lower --rate, or fewer outputs "
+              "(--plot and --bag hold the whole record)", file=sys.stderr)
+        return 1
+    except RecursionError:
+        print(f"{prog}: error: an input is nested too deeply to be read", file=sys.stderr)
         return 1
 
 

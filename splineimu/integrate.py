@@ -454,6 +454,9 @@ def dead_reckon(imu_path, init=None, method: str = "rk4", gravity=DEFAULT_GRAVIT
 
     imu_path = Path(imu_path)
     sampling = recorded_sampling(imu_path) if sampling is None else one_of(sampling, "sampling", SAMPLINGS)
+    if not imu_path.is_file():
+        raise InputError("IMU file not found" if not imu_path.exists() else "is a folder, expected an IMU csv",
+                         path=imu_path)
     gt_path = Path(init) if init is not None else default_groundtruth_path(imu_path)
     if not gt_path.is_file():
         hint = "" if init is not None else " (the default beside the IMU file); pass --init GROUND_TRUTH"

@@ -180,9 +180,15 @@ def load_tum(path):
     if not p.is_file():
         raise InputError("no such file", path=p)
     try:
-        return file_interface.read_tum_trajectory_file(str(p))
+        traj = file_interface.read_tum_trajectory_file(str(p))
     except Exception as exc:
         raise InputError(str(exc) or type(exc).__name__, path=p) from None
+    if not all(np.isfinite(a).all() for a in (traj.timestamps, traj.positions_xyz, traj.orientations_quat_wxyz)):
+        from .io.tum import read_tum
+
+        read_tum(p, min_poses=1, repeated_stamps="first")  # names the line and the value
+        raise InputError("holds a value that is not a finite number", path=p)
+    return traj
 
 
 def _as_evo(traj, name):
@@ -422,6 +428,9 @@ def plot_compare(result: CompareResult, path) -> Path:
         ax.set_ylabel(f"{r.metric.upper()} ({r.unit})")
         ax.set_title(r.title, fontsize="small")
         ax.legend(loc="best", fontsize="small")
+    from .io.files import staged_path
+
     out = Path(path)
-    fig.savefig(out, dpi=110)
+    with staged_path(out) as tmp:  # a failure or an interrupt leaves what was there
+        fig.savefig(tmp, dpi=110, format="png")
     return out

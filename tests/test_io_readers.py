@@ -327,7 +327,8 @@ def test_read_timestamps_units_and_header(tmp_path):
     p = write(tmp_path, "t a\n0.5 x\n1.25 y\n", "b.txt")  # non-numeric header, seconds
     assert read_timestamps(p).tolist() == [500_000_000, 1_250_000_000]
     p = write(tmp_path, "0\n1\n2\n", "c.txt")
-    assert read_timestamps(p).tolist() == [0, 1, 2]  # integers are ns by default
+    with pytest.raises(InputError, match="look like seconds"):  # integers are ns, and 1 ns steps are not
+        read_timestamps(p)
     assert read_timestamps(p, unit="s").tolist() == [0, 10**9, 2 * 10**9]
     p = write(tmp_path, "0\n0.005\n0.010\n", "d.txt")  # mixed: one decimal makes all seconds
     assert read_timestamps(p).tolist() == [0, 5_000_000, 10_000_000]

@@ -155,19 +155,14 @@ def test_static_reads_gravity_and_zero_rate():
     np.testing.assert_allclose(k.world_R_body[0], so3_exp([0, 0, 0.7]), rtol=0, atol=1e-15)
 
 
-def test_static_is_cheap_for_three_hours_at_200hz():
-    import time
-
+def test_static_three_hours_at_200hz_is_vectorized():
+    # Vectorized arrays for 2.16e6 samples (its speed is measured in benchmarks/bench_allan.py).
     sc = make_scene("static", duration_s=3 * 3600.0)
     t = np.arange(2_160_000) / 200.0
-    t0 = time.perf_counter()
     k = sc.kinematics(t)
-    elapsed = time.perf_counter() - t0
     assert k.world_R_body.shape == (2_160_000, 3, 3) and k.world_R_body.flags.c_contiguous
     assert k.omega_body.flags.writeable
     assert np.array_equal(k.world_R_body[-1], np.eye(3))
-    # ~0.1 s here; a per-sample Python loop would take ~10 s.
-    assert elapsed < 3.0, elapsed
 
 
 # --------------------------------------------------------------------------- circle

@@ -110,6 +110,9 @@ def default_cluster_factors(n_samples: int, points_per_decade: float = 10.0,
     >>> default_cluster_factors(1000, 5)[:6].tolist()
     [1, 2, 3, 4, 6, 10]
     """
+    from ..validation import positive_float
+
+    positive_float(points_per_decade, "points_per_decade")
     m_max = max(1, int(n_samples * max_fraction))
     m_max = min(m_max, max(1, (n_samples - 1) // 2))
     if m_max == 1:

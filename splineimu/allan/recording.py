@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..errors import ConfigError, OutputExistsError
+from ..errors import ConfigError, InputError, OutputExistsError
 from .deviation import AllanResult, allan_deviation
 from .fit import NoiseFit, fit_noise_parameters
 from .report import allan_yaml_header, format_table, imu_noise_dict
@@ -89,28 +89,42 @@ def analyze_recording(path, fmt=None, rate_hz=None, gyro_unit=None, accel_unit=N
     from ..io.imu_csv import load_recording
 
     rec = load_recording(path, fmt, rate_hz, gyro_unit, accel_unit)
+    n = len(rec.values)
+    if n < MIN_SAMPLES:
+        raise InputError(f"{n} samples ({n / rec.rate_hz:.3g} s) are too few for an Allan analysis (at least "
+                         f"{MIN_SAMPLES}); record a static IMU for minutes (white noise) to hours (bias instability)",
+                         path=path)
     result = allan_deviation(rec.values, rec.rate_hz, points_per_decade=points_per_decade,
                              labels=list(IMU_LABELS))
     return AllanAnalysis(result, fit_noise_parameters(result), source=str(path), notes=list(rec.notes))
 
 
-def allan_output_paths(out_dir, plot: bool = False, force: bool = False) -> list:
+#: Fewest samples an Allan analysis accepts (its longest cluster time is a quarter of the record).
+MIN_SAMPLES = 100
+
+
+def allan_output_paths(out_dir, plot: bool = False, force: bool = False, inputs=()) -> list:
     """``[out_dir/allan.yaml (, out_dir/allan.png)]``, checked before any work is done.
 
     Raises
     ------
     ConfigError
-        ``out_dir`` exists and is not a folder.
+        ``out_dir`` exists and is not a folder; a target is a symbolic link, a folder or one of
+        ``inputs`` (the files the analysis reads).
     OutputExistsError
         A target exists and ``force`` is false.
     """
+    from ..io.files import check_output_file
+
     out_dir = Path(out_dir)
     if out_dir.exists() and not out_dir.is_dir():
         raise ConfigError(f"-o {out_dir}: exists and is not a directory")
     targets = [out_dir / "allan.yaml"] + ([out_dir / "allan.png"] if plot else [])
-    existing = [str(p) for p in targets if p.exists()]
+    existing = [str(p) for p in targets if p.exists() or p.is_symlink()]
     if existing and not force:
         raise OutputExistsError(f"{', '.join(existing)} exist(s); use --force to overwrite")
+    for p in targets:
+        check_output_file(p, True, inputs=inputs)
     return targets
 
 

@@ -137,10 +137,21 @@ def _check_output(job, write):
         if job.output.dir is None and job.output.tum is None:
             raise ConfigError("nothing to write: give an output folder (or, for a scene, a TUM file)",
                               option="--out")
-        if job.output.dir is not None:
-            from ..io.files import check_output_dir
+        from ..io.files import check_not_input, check_output_dir, check_output_file
 
+        inputs = _input_files(job)
+        if job.output.dir is not None:
             check_output_dir(job.output.dir, job.output.force)
+            check_not_input(job.output.dir, inputs)
+        if job.output.tum is not None:
+            check_output_file(job.output.tum, job.output.force, inputs, option="--tum")
+
+
+def _input_files(job) -> list:
+    """The files a job reads (an output may never replace one)."""
+    files = [getattr(job.motion, "path", None), job.imu.timestamps]
+    files += [v for v in (job.imu.model, job.imu.extrinsic) if isinstance(v, str) and Path(v).exists()]
+    return [f for f in files if f is not None]
 
 
 def _seed(job):
@@ -155,9 +166,22 @@ def _seed(job):
     return int(np.random.SeedSequence().entropy % (2**63))
 
 
-def _stamps(job, first_ns: int, last_ns: int, log, seed=None):
+def _fits(job, n, write, tum=False):
+    """Refuse, before allocating, a record of ``n`` samples that cannot fit (memory, disk)."""
+    from ..resources import check_record_fits
+
+    out = job.output
+    whole = " and ".join(f for f, on in (("--bag", out.bag), ("--plot", out.plot)) if on and write) or None
+    whole = whole if write else "the in-memory result"
+    check_record_fits(n, rate_hz=job.imu.rate_hz if job.imu.timestamps is None else None, whole=whole,
+                      out_dir=out.dir if write else None, tum=out.tum if tum else None)
+
+
+def _stamps(job, first_ns: int, last_ns: int, log, seed=None, write=True):
     """The stamps: a grid at ``rate_hz``, the given ``timestamps``, or (with a timing model) the
     :class:`~splineimu.imu.timing.SampleTimes` of the IMU's clock."""
+    if job.imu.timestamps is None:  # a grid: refuse what cannot fit before allocating it
+        _fits(job, int((last_ns - first_ns) * job.imu.rate_hz / 1e9) + 1, write)
     if job.imu.timing is not None:
         from ..pipeline import TIMING_SEED_KEY, child_seed
 
@@ -178,6 +202,7 @@ def _stamps(job, first_ns: int, last_ns: int, log, seed=None):
     if not keep.any():
         raise InputError(f"no stamp lies inside the motion's span [{first_ns}, {last_ns}] ns",
                          path=job.imu.timestamps)
+    _fits(job, int(keep.sum()), write)
     dropped = int((~keep).sum())
     if dropped:
         log.line(f"note: {dropped} stamps of {job.imu.timestamps} lie outside the pose span and were dropped")
@@ -226,12 +251,13 @@ def synthesize_scene(job: SynthesisJob, *, echo=None, write: bool = True) -> Syn
     scene = scenes.make_scene(m.name, duration_s=m.duration_s, t0_ns=m.t0_ns, **m.params)
     result.source = scene
     if write and job.output.tum:
+        _fits(job, int(scene.t_max_s * job.imu.rate_hz) + 1, False, tum=True)
         scenes.write_scene_tum(scene, job.output.tum, job.imu.rate_hz)
         log.line(f"poses         {job.output.tum} ({job.imu.rate_hz:g} Hz)")
     if write and job.output.dir is None:
         return result
     seed = _seed(job)
-    t_ns = _stamps(job, scene.origin_ns, scene.origin_ns + int(round(scene.t_max_s * 1e9)), log, seed)
+    t_ns = _stamps(job, scene.origin_ns, scene.origin_ns + int(round(scene.t_max_s * 1e9)), log, seed, write)
     _synthesize(job, scene, t_ns, seed, job.output.dir, scene_report(scene, job), write, result)
     log.line(f"scene         {m.name}, {scene.t_max_s:g} s")
     log.line(imu_line(getattr(t_ns, "stamp_ns", t_ns), job, seed))
@@ -334,7 +360,7 @@ def _one(job, track, out_dir, gaps, max_gap, write, result, log):
         log.line(f"outliers      {len(where)} poses dropped (lines {', '.join(map(str, where[:8]))}"
                  f"{', ...' if len(where) > 8 else ''}); --keep-outliers keeps them")
     seed = _seed(job)
-    t_ns = _stamps(job, int(track.t_ns[0]), int(track.t_ns[-1]), log, seed)
+    t_ns = _stamps(job, int(track.t_ns[0]), int(track.t_ns[-1]), log, seed, write)
     fit_data = _fit_residuals(spl, t_s, track) if (write and job.output.plot) else None
     report = poses_report(job, track, rep, gaps, max_gap)
     _synthesize(job, spl, t_ns, seed, out_dir, report, write, result, force=job.output.force if not quiet else False,

@@ -210,6 +210,9 @@ def calibrate_file(path, sensor: str, options: CalibrationOptions | None = None,
         if Path(out_dir).exists() and not Path(out_dir).is_dir():
             raise OutputExistsError(f"output path '{out_dir}' exists and is not a folder")
         target = Path(out_dir) / "calibration.yaml"
+        from ..io.files import check_output_file
+
+        check_output_file(target, True, inputs=[path, truth])  # never a link, a folder or an input
         check_calibration_target(target, [sensor], force)
     csv = Path(path)
     folder = _data_folder(csv)

@@ -47,11 +47,13 @@ def add_arguments(parser) -> None:
 def run(args) -> int:
     from ..allan import allan_output_paths, analyze_recording, write_allan_outputs
     from ..errors import ConfigError
+    from ..validation import positive_float
 
+    positive_float(args.points_per_decade, "--points-per-decade")
     if args.plot and not args.output:
         raise ConfigError("--plot needs -o DIR (the plot is written to DIR/allan.png)")
     if args.output:
-        allan_output_paths(args.output, args.plot, args.force)  # fail before the analysis
+        allan_output_paths(args.output, args.plot, args.force, inputs=[args.input])  # fail before the analysis
     analysis = analyze_recording(args.input, args.format, args.rate, args.gyro_unit, args.accel_unit,
                                  points_per_decade=args.points_per_decade)
     for note in analysis.notes:

@@ -44,10 +44,15 @@ def add_arguments(parser) -> None:
                         help="constant offset added to EST's stamps [s] (default: 0)")
     parser.add_argument("--plot", metavar="FILE.png", default=None,
                         help="save a plot: trajectories (x-y) and errors over time")
+    parser.add_argument("--force", action="store_true", help="replace an existing --plot file")
 
 
 def run(args) -> int:
+    from ..io.files import check_output_file
     from ..metrics import compare_files
+
+    if args.plot is not None:
+        check_output_file(args.plot, args.force, inputs=[args.est, args.ref], option="--plot")
 
     res = compare_files(args.est, args.ref, plot=args.plot, metric=args.metric, pose_relation=args.pose_relation,
                         align=args.align, delta=args.delta, delta_unit=args.delta_unit, all_pairs=args.all_pairs,

@@ -45,11 +45,14 @@ def add_arguments(parser) -> None:
                         help="the samples are values at the stamps, or means over [previous stamp, stamp] "
                              "(default: as recorded in the folder's report.json, else point)")
     parser.add_argument("-o", "--output", required=True, metavar="TRAJ.tum", help="output TUM file")
+    parser.add_argument("--force", action="store_true", help="replace an existing output file")
 
 
 def run(args) -> int:
     from ..integrate import dead_reckon
+    from ..io.files import check_output_file
 
+    check_output_file(args.output, args.force, inputs=[args.imu_csv, args.init])
     res = dead_reckon(args.imu_csv, init=args.init, method=args.method, gravity=args.gravity,
                       sampling=args.sampling)
     if res.skipped_samples:

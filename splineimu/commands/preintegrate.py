@@ -56,12 +56,21 @@ def add_arguments(parser) -> None:
                              "(default: as recorded in OUT_FOLDER/report.json, else point)")
     parser.add_argument("--all", action="store_true", help="print every window (default: at most 40)")
     parser.add_argument("-o", "--output", metavar="CSV", default=None, help="also write the table as csv")
+    parser.add_argument("--force", action="store_true", help="replace an existing output file")
 
 
 def run(args) -> int:
-    from ..io.files import atomic_write_text
+    from pathlib import Path
+
+    from ..io.files import check_output_file, write_output_file
     from ..preintegration import evaluate_recording
 
+    folder = Path(args.out_folder)
+    inputs = [args.imu_csv, args.stamps, args.imu, args.groundtruth, folder / "imu.yaml"]
+    inputs += [base / sub / "data.csv" for base in (folder, folder / "mav0")  # the defaults, either layout
+               for sub in ("imu0", "state_groundtruth_estimate0")]
+    if args.output:
+        check_output_file(args.output, args.force, inputs=inputs)
     res = evaluate_recording(args.out_folder, imu_csv=args.imu_csv, groundtruth=args.groundtruth,
                              every=args.every, stamps=args.stamps, imu=args.imu, method=args.method,
                              covariance=args.covariance, gravity=args.gravity, sampling=args.sampling)
@@ -79,5 +88,5 @@ def run(args) -> int:
             print(f"mean NEES {test.mean:.3f} (9 dof; 95% interval for {test.n_windows} windows "
                   f"[{test.low:.3f}, {test.high:.3f}]: {'inside' if test.inside else 'OUTSIDE'})")
     if args.output:
-        print(f"table -> {atomic_write_text(args.output, df.to_csv(index=False))}")
+        print(f"table -> {write_output_file(args.output, df.to_csv(index=False), args.force, inputs=inputs)}")
     return 0

@@ -60,6 +60,8 @@ def _ros_stamps(t, name, kind):
         raise InputError(f"Expected `{name}` >= 0 (ROS time is unsigned), got {int(t.min())}")
     if kind == "ros1" and t.size and t.max() // 1_000_000_000 >= 2**32:
         raise InputError(f"Expected `{name}` below 2**32 s for ROS 1 time")
+    if kind == "ros2" and t.size and t.max() // 1_000_000_000 >= 2**31:  # builtin_interfaces/Time: int32 sec
+        raise InputError(f"Expected `{name}` below 2**31 s (year 2038) for ROS 2 time; shift the stamps (--t0-ns)")
     return t
 
 

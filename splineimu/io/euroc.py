@@ -106,6 +106,18 @@ def read_euroc_groundtruth(path, min_poses: int = 2, repeated_stamps: str = "err
     >>> gt.t_ns[0], gt.quat_xyzw.tolist()
     (np.int64(1403715524907143168), [[0.0, 0.0, 0.0, 1.0], [0.0, 0.0, 1.0, 0.0]])
     """
+    from ..errors import InputError
+    from .sniff import add_format_hint
+
+    try:
+        return _read_groundtruth(path, min_poses, repeated_stamps)
+    except InputError as exc:
+        raise add_format_hint(exc, path, "euroc_gt") from None
+
+
+def _read_groundtruth(path, min_poses, repeated_stamps):
+    from .sniff import check_ns_spacing
+
     table = read_table(
         path, n_cols=8, column_names=_NAMES_17, sep=",", allow_header=True, wide_cols=17
     )
@@ -117,8 +129,12 @@ def read_euroc_groundtruth(path, min_poses: int = 2, repeated_stamps: str = "err
     kw = {}
     if table.n_cols == 17:
         kw = dict(velocity_world=v[:, 7:10], bias_gyro=v[:, 10:13], bias_accel=v[:, 13:16])
-    return track_from_table(table, unit, v[:, [4, 5, 6, 3]], path=path, notices=notices, min_poses=min_poses,
-                            repeated_stamps=repeated_stamps, **kw)
+    track = track_from_table(table, unit, v[:, [4, 5, 6, 3]], path=path, notices=notices, min_poses=min_poses,
+                             repeated_stamps=repeated_stamps, **kw)
+    if unit == "ns":
+        check_ns_spacing(track.t_ns, path=path, advice="EuRoC stamps are integer nanoseconds: convert the column "
+                         "(stamps with a decimal point are read as seconds)")
+    return track
 
 
 def _imu_table(t_ns, gyro, accel):

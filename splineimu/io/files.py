@@ -16,11 +16,14 @@ import shutil
 from contextlib import contextmanager
 from pathlib import Path
 
-from ..errors import OutputExistsError
+from ..errors import ConfigError, OutputExistsError
 
 __all__ = [
     "OutputFolder",
     "check_output_dir",
+    "check_output_file",
+    "check_not_input",
+    "write_output_file",
     "atomic_write_bytes",
     "atomic_write_text",
     "replace_path",
@@ -59,6 +62,11 @@ def check_output_dir(out_dir, force: bool = False) -> Path:
     True
     """
     out = Path(out_dir)
+    if not str(out_dir):
+        raise ConfigError("output folder: empty path", option="-o")
+    if _is_link(out):
+        raise ConfigError(f"output path '{out}' is a symbolic link; give the folder it points to, or remove the link",
+                          option="-o")
     if force:
         return out
     if out.is_dir():
@@ -69,6 +77,118 @@ def check_output_dir(out_dir, force: bool = False) -> Path:
     elif out.exists() or out.is_symlink():
         raise OutputExistsError(f"output path '{out}' exists and is not a folder; use --force to replace it")
     return out
+
+
+def _is_link(path: Path) -> bool:
+    return path.is_symlink()
+
+
+def check_not_input(out, inputs=(), option: str = "-o") -> None:
+    """Refuse an output location that is, or (a folder that) contains, one of ``inputs``.
+
+    Paths are compared resolved (symbolic links and ``..`` followed) and, for existing files,
+    with :func:`os.path.samefile` (hard links), so no spelling of an input can overwrite it.
+
+    Raises
+    ------
+    ConfigError
+        ``out`` is an input, or a folder that holds one (replacing it would delete the input).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> d = pathlib.Path(tempfile.mkdtemp()); _ = (d / "in.tum").write_text("1 0 0 0 0 0 0 1\\n")
+    >>> check_not_input(d / "." / "in.tum", [d / "in.tum"])
+    Traceback (most recent call last):
+    ...
+    splineimu.errors.ConfigError: ... is an input of this command; choose another output
+    """
+    out = Path(out)
+    try:
+        out_r = out.resolve()
+    except (OSError, RuntimeError):  # a symlink loop: refused elsewhere
+        return
+    for inp in inputs:
+        if inp is None:
+            continue
+        inp = Path(inp)
+        try:
+            in_r = inp.resolve()
+            same = out_r == in_r or (out.exists() and inp.exists() and os.path.samefile(out, inp))
+        except (OSError, RuntimeError):
+            continue
+        if same:
+            raise ConfigError(f"{option} '{out}' is an input of this command; choose another output",
+                              option=option)
+        if out_r in in_r.parents:
+            raise ConfigError(f"{option} '{out}' holds the input '{inp}', which replacing it would delete; "
+                              "choose another output", option=option)
+
+
+def check_output_file(path, force: bool = False, inputs=(), option: str = "-o") -> Path:
+    """Fail fast if a single-file output may not be written at ``path``.
+
+    Call it before the work; :func:`write_output_file` calls it again before writing.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file to be written.
+    force : bool, default False
+        Allow replacing an existing file.
+    inputs : sequence of path-like
+        Files this command reads: ``path`` may never be one of them.
+    option : str
+        The option that gave ``path``, for messages.
+
+    Raises
+    ------
+    OutputExistsError
+        ``path`` exists and ``force`` is False.
+    ConfigError
+        ``path`` is a symbolic link, a folder, or an input.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> d = pathlib.Path(tempfile.mkdtemp()); _ = (d / "t.tum").write_text("x")
+    >>> check_output_file(d / "t.tum")
+    Traceback (most recent call last):
+    ...
+    splineimu.errors.OutputExistsError: output file '...t.tum' exists; use --force to replace it
+    """
+    out = Path(path)
+    if not str(path):
+        raise ConfigError(f"{option}: empty path", option=option)
+    if _is_link(out):
+        raise ConfigError(f"{option} '{out}' is a symbolic link; give the path it points to, or remove the link",
+                          option=option)
+    if out.is_dir():
+        raise ConfigError(f"{option} '{out}' is a folder; give a file name", option=option)
+    check_not_input(out, inputs, option)
+    if out.exists() and not force:
+        raise OutputExistsError(f"output file '{out}' exists; use --force to replace it", option=option)
+    return out
+
+
+def write_output_file(path, data, force: bool = False, inputs=(), option: str = "-o") -> Path:
+    """Write a single-file output atomically after :func:`check_output_file`.
+
+    ``data`` is bytes, an iterable of bytes, or str (UTF-8). Missing parent folders are
+    created. A failure (or an interrupt) leaves what was at ``path`` untouched.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "sub" / "w.csv"
+    >>> write_output_file(p, "a,b\\n").read_text()
+    'a,b\\n'
+    """
+    out = check_output_file(path, force, inputs, option)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    if isinstance(data, str):
+        data = data.encode("utf-8")
+    return atomic_write_bytes(out, data)
 
 
 def _unique_sibling(path: Path, tag: str) -> Path:

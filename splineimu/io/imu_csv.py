@@ -139,9 +139,23 @@ def read_imu_csv(path):
 def read_imu_table(path):
     """:func:`read_imu_csv`, returning ``(t_ns (N,), values (N, 6))`` with the gyro in columns
     0-2 and the accelerometer in 3-5 (one array, no further copies)."""
+    from .timestamps import check_line_lengths
+
     path = Path(path)
     if not path.is_file():
-        raise InputError("file not found", path)
+        raise InputError("file not found" if not path.exists() else "is a folder, expected a file", path)
+    check_line_lengths(path)
+    try:
+        return _read_imu_table(path)
+    except InputError as exc:
+        from .sniff import add_format_hint
+
+        raise add_format_hint(exc, path, "euroc_imu") from None
+
+
+def _read_imu_table(path):
+    from .sniff import check_ns_spacing
+
     try:
         t_ns, vals = _read_fast(path)
     except Exception:  # noqa: BLE001 - any failure: the exact parser finds and names the line
@@ -158,6 +172,7 @@ def read_imu_table(path):
         return _line_of_data_row(path, i)
 
     _check_stamps(t_ns, path, line_of_row)
+    check_ns_spacing(t_ns, path=path, advice="an EuRoC IMU csv has integer nanoseconds: convert the column")
     return t_ns, vals
 
 

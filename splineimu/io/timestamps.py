@@ -13,6 +13,7 @@ parse fails, to either accept a ragged file or name the first bad line.
 from __future__ import annotations
 
 import decimal
+import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -21,7 +22,11 @@ import numpy as np
 from ..errors import InputError
 from ..validation import one_of
 
-__all__ = ["parse_stamps", "read_timestamps", "read_table", "Table"]
+__all__ = ["parse_stamps", "read_timestamps", "read_table", "Table", "check_line_lengths", "MAX_LINE_BYTES"]
+
+#: Longest line a text table may have (a data row is some hundred bytes; a longer "line" is
+#: a binary or foreign file, refused before it is read whole).
+MAX_LINE_BYTES = 1 << 20
 
 _NS_PER_S = 1_000_000_000
 _INT64_MAX = np.iinfo(np.int64).max
@@ -196,16 +201,62 @@ class Table:
         return f"ignored {cols} on {where}"
 
 
-def _read_lines(path) -> list[str]:
-    p = Path(path)
+def check_line_lengths(path, max_bytes: int = MAX_LINE_BYTES) -> None:
+    """Refuse a file with a line longer than ``max_bytes``, without reading that line whole.
+
+    The file is mapped and only probed: every aligned block of ``max_bytes // 2`` bytes must
+    hold a newline (the search stops at the first), so clean files cost a few microseconds
+    per megabyte; only a block without one is looked at closely.
+
+    Raises
+    ------
+    InputError
+        The file is missing, a folder, unreadable, or has such a line (its number is given).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "t.txt"
+    >>> _ = p.write_text("1 2\\n" + "x" * 100 + "\\n")
+    >>> check_line_lengths(p, max_bytes=64)
+    Traceback (most recent call last):
+    ...
+    splineimu.errors.InputError: ...t.txt:2: line longer than 64 bytes: not a text table of this kind
+    """
+    import mmap
+
     try:
-        raw = p.read_bytes()
+        with open(path, "rb") as fh:
+            size = os.fstat(fh.fileno()).st_size
+            if size <= max_bytes:
+                return
+            with mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ) as mm:
+                _probe_lines(mm, size, max_bytes, path)
     except FileNotFoundError:
         raise InputError("file not found", path=path) from None
     except IsADirectoryError:
         raise InputError("is a folder, expected a file", path=path) from None
     except PermissionError:
         raise InputError("permission denied", path=path) from None
+
+
+def _probe_lines(mm, size, max_bytes, path):
+    block = max(max_bytes // 2, 1)
+    for start in range(0, size, block):
+        end = min(start + block, size)
+        if end - start < block or mm.find(b"\n", start, end) >= 0:
+            continue
+        first = mm.rfind(b"\n", 0, start) + 1  # the line holding this block starts here
+        nxt = mm.find(b"\n", first, first + max_bytes + 1)
+        if nxt < 0 and size - first > max_bytes:
+            line = mm[:first].count(b"\n") + 1
+            raise InputError(f"line longer than {max_bytes} bytes: not a text table of this kind",
+                             path=path, line=line)
+
+
+def _read_lines(path) -> list[str]:
+    check_line_lengths(path)  # also: missing, a folder, no permission (one-line errors)
+    raw = Path(path).read_bytes()
     if b"\x00" in raw[:4096]:
         raise InputError("looks like a binary file, expected text", path=path)
     text = raw.decode("utf-8-sig", errors="replace")
@@ -393,8 +444,9 @@ def read_timestamps(path, unit: str | None = None) -> np.ndarray:
     unit : {None, "ns", "s"}, default None
         Unit of the numbers. ``None`` decides from the text: if any stamp has a decimal
         point or an exponent, all are seconds (parsed exactly, as in
-        :func:`parse_stamps`); if all are plain integers they are nanoseconds -- even when
-        they are small (integer seconds such as ``0 1 2`` need ``unit="s"``).
+        :func:`parse_stamps`); if all are plain integers they are nanoseconds, and stamps
+        that then step by less than a microsecond are refused as what they look like
+        (integer seconds such as ``0 1 2`` need ``unit="s"``).
 
     Returns
     -------
@@ -404,8 +456,9 @@ def read_timestamps(path, unit: str | None = None) -> np.ndarray:
     Raises
     ------
     InputError
-        Unreadable file, no rows, a stamp that is not a number, or stamps that are not
-        strictly increasing (naming the line and the previous one).
+        Unreadable file, no rows, a stamp that is not a number, stamps that are not
+        strictly increasing (naming the line and the previous one), or integer stamps
+        that step by less than 1 us (seconds or milliseconds read as nanoseconds).
 
     Examples
     --------
@@ -418,10 +471,16 @@ def read_timestamps(path, unit: str | None = None) -> np.ndarray:
     one_of(unit, "unit", (None, "ns", "s"))
     table = _read_first_column(path)
     stamps = table.stamps
+    guessed = unit is None
     if unit is None:
         unit = "ns" if all(_is_integer_text(s) for s in stamps) else "s"
     t_ns, _ = parse_stamps(stamps, unit, path=path, line_numbers=table.line_numbers)
     _check_increasing(t_ns, table.line_numbers, path)
+    if guessed and unit == "ns":
+        from .sniff import check_ns_spacing
+
+        check_ns_spacing(t_ns, path=path, advice="integer stamps are read as nanoseconds: give nanoseconds, "
+                         "or seconds with a decimal point (1.0)")
     return t_ns
 
 

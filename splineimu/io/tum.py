@@ -68,9 +68,17 @@ def read_tum(path, min_poses: int = 2, repeated_stamps: str = "error") -> PoseTr
     >>> tr.t_ns.tolist(), tr.line_numbers.tolist()
     ([1305031102175304000, 1305031102185304000], [2, 3])
     """
-    table = read_table(path, n_cols=8, column_names=TUM_COLUMNS, sep="auto")
-    return track_from_table(table, "s", table.values[:, 3:7], path=path, min_poses=min_poses,
-                            repeated_stamps=repeated_stamps)
+    from ..errors import InputError
+    from .sniff import add_format_hint, check_seconds_magnitude
+
+    try:
+        table = read_table(path, n_cols=8, column_names=TUM_COLUMNS, sep="auto")
+        check_seconds_magnitude(table.stamps[0], path=path, line=int(table.line_numbers[0]),
+                                advice="TUM stamps are decimal seconds: convert the column")
+        return track_from_table(table, "s", table.values[:, 3:7], path=path, min_poses=min_poses,
+                                repeated_stamps=repeated_stamps)
+    except InputError as exc:
+        raise add_format_hint(exc, path, "tum") from None
 
 
 def _tum_table(t_ns, positions, quat_xyzw):

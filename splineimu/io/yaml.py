@@ -177,8 +177,9 @@ def parse_yaml(text: str, name: str = "<yaml>") -> YamlDoc:
     import yaml
 
     text = _OPENCV_DIRECTIVE.sub(r"\1", text, count=1)  # keep the line count for messages
-    loader = _loader_class()(text)
+    loader = None
     try:
+        loader = _loader_class()(text)  # checks the characters (a NUL byte is refused here)
         node = loader.get_single_node()
         lines: dict = {}
         data = None
@@ -193,12 +194,15 @@ def parse_yaml(text: str, name: str = "<yaml>") -> YamlDoc:
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None) or getattr(exc, "context_mark", None)
         problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
-        raise ConfigError(f"invalid YAML: {problem}", path=name,
-                          line=None if mark is None else mark.line + 1) from None
+        line = None if mark is None else mark.line + 1
+        if isinstance(exc, yaml.reader.ReaderError):  # a character YAML does not allow
+            line = text.count("\n", 0, max(exc.position, 0)) + 1
+        raise ConfigError(f"invalid YAML: {problem}", path=name, line=line) from None
     except RecursionError:
         raise ConfigError(f"refused: nested deeper than {MAX_DEPTH} levels", path=name) from None
     finally:
-        loader.dispose()
+        if loader is not None:
+            loader.dispose()
     return YamlDoc({} if data is None else data, name, lines)
 
 
