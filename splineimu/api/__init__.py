@@ -19,7 +19,8 @@ import importlib
 
 _NAMES = {
     "options": ("ImuOptions", "SplineOptions", "PosesInput", "SceneInput", "OutputOptions", "SynthesisJob"),
-    "synthesis": ("SynthesisResult", "run_job", "synthesize_poses", "synthesize_scene", "synthesize_to_memory"),
+    "synthesis": ("SynthesisResult", "PreparedMotion", "prepare_motion", "run_job", "synthesize_poses",
+                  "synthesize_scene", "synthesize_to_memory"),
     "scenefile": ("load_scene_file",),
 }
 _WHERE = {name: mod for mod, names in _NAMES.items() for name in names}

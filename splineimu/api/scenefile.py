@@ -57,7 +57,7 @@ from .options import ImuOptions, OutputOptions, PosesInput, SceneInput, SplineOp
 
 #: Keys of each section (the file's structure).
 KEYS = {
-    (): ("motion", "imu", "seed", "output"),
+    (): ("motion", "imu", "seed", "output", "vary"),
     ("motion",): ("scene", "duration_s", "t0_ns", "params", "poses", "format", "spline", "gaps", "max_gap_s",
                   "repeated_stamps"),
     ("motion", "spline"): ("kind", "order", "knot_spacing_s", "smoothness", "keep_outliers"),
@@ -95,7 +95,7 @@ def _build(cls, doc, section: dict, keys: tuple, fields, extra=None, **kw):
     return cls(**values, **kw, origin=YamlOrigin(doc, place))
 
 
-def load_scene_file(path) -> SynthesisJob:
+def load_scene_file(path, run_index: int | None = None) -> SynthesisJob:
     """Read a scene file into a :class:`~splineimu.api.options.SynthesisJob`.
 
     Parameters
@@ -103,6 +103,9 @@ def load_scene_file(path) -> SynthesisJob:
     path : str or os.PathLike
         The YAML file (format in the module docstring). Relative paths in it are relative to
         its folder.
+    run_index : int, optional
+        Run ``k`` of a Monte-Carlo batch over the file's ``vary:`` block: its draws and seed
+        (:class:`~splineimu.api.variants.SceneFile`); without it the nominal values.
 
     Returns
     -------
@@ -114,10 +117,16 @@ def load_scene_file(path) -> SynthesisJob:
         Unreadable or invalid YAML, an unknown key (with a did-you-mean), a missing or invalid
         value: each with the file and line.
     """
-    from ..io.yaml import read_yaml
+    from .variants import SceneFile
 
-    doc = read_yaml(path, "scene file")
-    base = Path(path).parent
+    if run_index is None:
+        return SceneFile.read(path).job()
+    return SceneFile.read(Path(path).resolve()).job(run_index)
+
+
+def job_from_document(doc, base) -> SynthesisJob:
+    """The job of a parsed scene file (:class:`~splineimu.io.yaml.YamlDoc`) whose relative paths start at ``base``."""
+    base = Path(base)
     if not isinstance(doc.data, dict):
         raise doc.error(f"a scene file is a mapping with motion, imu, seed, output; got {type(doc.data).__name__}")
     top = _section(doc, ())
@@ -165,4 +174,4 @@ def load_scene_file(path) -> SynthesisJob:
         raise ConfigError(exc.problem, path=doc.name, option=exc.option) from None
 
 
-__all__ = ["load_scene_file", "KEYS"]
+__all__ = ["load_scene_file", "job_from_document", "KEYS"]

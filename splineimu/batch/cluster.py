@@ -83,8 +83,12 @@ def map_runs(client, fn, indices, *args, progress: bool = True, on_result=None):
     """
     from distributed import as_completed
 
-    shared = [client.scatter(a, broadcast=True) for a in args]
-    futures = {client.submit(fn, k, *shared, key=f"splineimu-run-{k}", pure=False, retries=2): k for k in indices}
+    import uuid
+
+    shared = [a if a is None else client.scatter(a, broadcast=True) for a in args]
+    token = uuid.uuid4().hex[:12]  # batches sharing a scheduler must not share task keys
+    futures = {client.submit(fn, k, *shared, key=f"splineimu-run-{token}-{k}", pure=False, retries=2): k
+               for k in indices}
     bar = None
     if progress:
         from tqdm.auto import tqdm
