@@ -422,5 +422,6 @@ def _fit_residuals(spl, t_s, track):
     return t_s, track.positions - p_fit, ang
 
 
-__all__ = ["SynthesisResult", "PreparedMotion", "prepare_motion", "run_job", "synthesize_poses", "synthesize_scene", "synthesize_to_memory",
+__all__ = ["SynthesisResult", "PreparedMotion", "prepare_motion", "run_job",
+           "synthesize_poses", "synthesize_scene", "synthesize_to_memory",
            "MIN_PIECE_POSES"]

@@ -81,9 +81,9 @@ def map_runs(client, fn, indices, *args, progress: bool = True, on_result=None):
     ``failed``. Returns the results and the steady-state time per run (wall time
     between the first and the last completion divided by the runs completed in between).
     """
-    from distributed import as_completed
-
     import uuid
+
+    from distributed import as_completed
 
     shared = [a if a is None else client.scatter(a, broadcast=True) for a in args]
     token = uuid.uuid4().hex[:12]  # batches sharing a scheduler must not share task keys

@@ -236,11 +236,11 @@ def run_batch(scene_file, runs: int, out_dir, *, workers: int | None = None, sch
     out = Path(out_dir).resolve()
     manifest = _manifest(scene, path)
     _prepare_out(out, manifest, resume, force)
-    job = scene.job(0, out_dir=out / "runs" / run_name(0))
-    prepared = None if scene.varies_motion else prepare_motion(job)
     result = BatchResult(out, rows, keys)
     with dask_client(workers, scheduler) as client:
-        result.workers = len(client.scheduler_info(n_workers=-1).get("workers", {}))
+        # the motion is the same in every run unless a varied key is under `motion`
+        prepared = None if scene.varies_motion else prepare_motion(scene.job())
+        result.workers = len(client.nthreads())
         if echo:
             echo(f"cluster       {result.workers} workers"
                  f"{' at ' + scheduler if scheduler else ' (local, one thread each)'}")
