@@ -24,12 +24,12 @@ from splineimu.calibration import (
     tilt_moments,
     write_calibration_yaml,
 )
-from splineimu.calibration_scenes import SIX_POSITION_ORDER, nominal_up_rotation
 from splineimu.cli import main
 from splineimu.errors import ConfigError, InputError, OutputExistsError
 from splineimu.imu.config import load_imu_config
 from splineimu.imu.noise import SensorModel
 from splineimu.scenes import SCENES, make_scene, scene_names
+from splineimu.scenes.calibration import SIX_POSITION_ORDER, nominal_up_rotation
 
 G = 9.81
 RATE_HZ = 200.0
@@ -236,8 +236,8 @@ def test_segmentation_rejects_bad_settings():
         find_steady_phases(t, np.zeros((99, 3)))
     with pytest.raises(InputError, match="increasing"):
         find_steady_phases(t[::-1], np.zeros((100, 3)))
-    with pytest.raises(InputError, match="integer"):
-        find_steady_phases(t.astype(float), np.zeros((100, 3)))
+    with pytest.raises(InputError, match="whole nanoseconds"):
+        find_steady_phases(t + 0.5, np.zeros((100, 3)))
 
 
 # --------------------------------------------------------------------------- exact recovery
@@ -317,8 +317,8 @@ def _assert_coverage(cov, label):
 
 @pytest.mark.parametrize(("name", "sensor"), [("six-position", "accelerometer"), ("rate-table", "gyroscope")])
 def test_two_sigma_coverage_over_100_seeds(name, sensor):
-    # measured: accelerometer mean 0.956 (min 0.92), gyroscope mean 0.953 (min 0.92);
-    # over 1000 seeds 0.955 (min 0.94) and 0.951 (min 0.94)
+    # measured (drift density estimated from the data): accelerometer mean 0.967 (min 0.95),
+    # gyroscope mean 0.953 (min 0.92); with the white-noise model alone 0.956 and 0.953
     cov, errs, stds = _coverage(name, sensor, range(100))
     _assert_coverage(cov, sensor)
     # the predicted std is the actual scatter (ratio of rms error to predicted std near 1)
@@ -331,7 +331,8 @@ def test_orientation_error_effect_and_the_tilt_model(name, sensor):
     """2 degree random position / mount errors: the nominal method is biased far beyond its
     predicted std; the random-tilt model states the misalignment uncertainty honestly (and,
     for the six-position test, removes most of the bias error) and keeps 2-sigma coverage."""
-    # measured: nominal coverage 0.016 / 0.258, tilt model 0.963 (min 0.92) / 0.968 (min 0.94)
+    # measured: nominal coverage 0.266 / 0.258 (0.016 for the six-position test without the drift
+    # estimate, which takes up part of the tilts' scatter), tilt model 0.964 (min 0.93) / 0.968 (min 0.94)
     tilt = 2.0
     cov_n, err_n, _ = _coverage(name, sensor, range(100), scene_tilt_deg=tilt)
     cov_t, err_t, std_t = _coverage(name, sensor, range(100), scene_tilt_deg=tilt, cal_tilt_deg=tilt)

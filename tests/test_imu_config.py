@@ -61,16 +61,64 @@ def test_every_key_round_trips_through_yaml(tmp_path):
     p = c.to_yaml(tmp_path / "imu.yaml", header="made by a test")
     assert sorted(x.name for x in tmp_path.iterdir()) == ["imu.yaml"]  # no temporary left behind
     text = p.read_text()
-    assert text.startswith("# made by a test\n")
+    assert text.startswith("%YAML 1.1\n---\n# made by a test\n")
     back = ImuConfig.from_yaml(p)
     assert back == c
-    assert set(yaml.safe_load(text)) == set(EVERY_KEY)  # the same names are written back
+    assert set(yaml.safe_load(text)) == set(EVERY_KEY) | {"rostopic"}  # the same names are written back
     # written values equal the given ones
     d = back.to_dict()
     for k, v in EVERY_KEY.items():
         if isinstance(v, (int, float)) and k != "temperature_profile":
             assert d[k] == v, k
     assert c != ImuConfig.from_dict(dict(EVERY_KEY, gyroscope_scale=0.0))
+
+
+def _numbers(x):
+    if isinstance(x, dict):
+        return [n for v in x.values() for n in _numbers(v)]
+    if isinstance(x, list):
+        return [n for v in x for n in _numbers(v)]
+    return [] if isinstance(x, str) else [x]
+
+
+def test_imu_yaml_is_kalibr_form_read_by_pyyaml(tmp_path):
+    c = ImuConfig.from_dict({"gyroscope_noise_density": 1.6968e-4, "gyroscope_random_walk": 2e-5,
+                             "accelerometer_noise_density": 2e-3, "accelerometer_random_walk": 3e-3,
+                             "update_rate": 200})
+    p = c.to_yaml(tmp_path / "imu.yaml", update_rate=400, rostopic="/vectornav/IMU")
+    lines = [x for x in p.read_text().splitlines() if not x.startswith("#")]
+    assert lines == ["%YAML 1.1", "---", "gyroscope_noise_density: 0.00016968", "gyroscope_random_walk: 2.0e-05",
+                     "accelerometer_noise_density: 0.002", "accelerometer_random_walk: 0.003",
+                     "rostopic: /vectornav/IMU", "update_rate: 400.0"]
+    d = yaml.safe_load(p.read_text())  # plain PyYAML, as Kalibr reads it
+    assert d["update_rate"] == 400.0 and d["gyroscope_random_walk"] == 2e-5 and d["rostopic"] == "/vectornav/IMU"
+    assert all(type(v) is float for k, v in d.items() if k != "rostopic")
+    assert ImuConfig.from_yaml(p).update_rate == 400.0
+    full = ImuConfig.from_dict(EVERY_KEY).to_yaml(tmp_path / "full.yaml")
+    numbers = _numbers(yaml.safe_load(full.read_text()))
+    assert len(numbers) > 60 and all(type(v) is float for v in numbers)
+    assert "rostopic: /imu0\n" in full.read_text()  # the default topic
+
+
+def test_imu_yaml_is_read_by_opencv_filestorage(tmp_path):
+    cv2 = pytest.importorskip("cv2")
+    c = ImuConfig.from_dict(dict(EVERY_KEY, temperature_profile=30.0, gyroscope_random_walk=2e-5))
+    p = c.to_yaml(tmp_path / "imu.yaml")
+    fs = cv2.FileStorage(str(p), cv2.FILE_STORAGE_READ)
+    assert fs.isOpened()
+    d = c.to_dict()
+    for key, want in d.items():
+        node = fs.getNode(key)
+        if isinstance(want, float):
+            assert node.isReal() and node.real() == want, key
+        else:  # per-axis vectors and 3x3 matrices
+            items = [node.at(i) for i in range(node.size())]
+            rows = [[it.at(j) for j in range(it.size())] if it.isSeq() else it for it in items]
+            leaves = [x for r in rows for x in (r if isinstance(r, list) else [r])]
+            assert node.isSeq() and all(x.isReal() for x in leaves), key
+            assert [[x.real() for x in r] if isinstance(r, list) else r.real() for r in rows] == want, key
+    assert fs.getNode("rostopic").string() == "/imu0"
+    fs.release()
 
 
 def test_shared_kalibr_chain_files_load():
@@ -159,6 +207,17 @@ def test_error_names_the_source_and_yaml_line(tmp_path):
         ImuConfig.from_yaml(tmp_path / "missing.yaml")
     p.write_text("- 1\n- 2\n")
     with pytest.raises(ConfigError, match="expected a mapping"):
+        ImuConfig.from_yaml(p)
+
+
+def test_bad_value_in_a_file_names_its_line(tmp_path):
+    p = tmp_path / "imu.yaml"
+    p.write_text("update_rate: 200\ngyroscope_noise_density: 1.0e-4\ngyroscope_random_walk: -2.0e-5\n")
+    with pytest.raises(ConfigError, match=r"imu\.yaml:3: `gyroscope_random_walk` must not be negative") as ei:
+        ImuConfig.from_yaml(p)
+    assert ei.value.line == 3 and ei.value.option == "gyroscope_random_walk"
+    p.write_text("%YAML:1.0\nimu0:\n  update_rate: 200\n  temperature_profile:\n    start: 20\n    rate: .nan\n")
+    with pytest.raises(ConfigError, match=r"imu\.yaml:6: `temperature_profile\.rate` must be finite"):
         ImuConfig.from_yaml(p)
 
 

@@ -16,13 +16,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from splineimu.errors import OutputExistsError
-from splineimu.io.output import (
-    OutputFolder,
-    atomic_write_bytes,
-    atomic_write_text,
-    check_output_dir,
-    format_table,
-)
+from splineimu.io.files import OutputFolder, atomic_write_bytes, atomic_write_text, check_output_dir
+from splineimu.io.tables import format_table
 
 
 def listing(folder):
@@ -214,7 +209,7 @@ def test_table_writer_works_in_a_forked_child(tmp_path):
     wait on the parent's formatting threads (which it does not have)."""
     import multiprocessing as mp
 
-    from splineimu.io.output import CHUNK_ROWS, TableWriter
+    from splineimu.io.tables import CHUNK_ROWS, TableWriter
 
     t = np.arange(3 * CHUNK_ROWS, dtype=np.int64)
     v = np.random.default_rng(0).normal(size=(t.size, 2))
@@ -228,7 +223,7 @@ def test_table_writer_works_in_a_forked_child(tmp_path):
 
 
 def _write_in_child(path, t, v):
-    from splineimu.io.output import TableWriter
+    from splineimu.io.tables import TableWriter
 
     with TableWriter(path) as w:
         w.write(t, v)

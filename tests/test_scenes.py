@@ -413,7 +413,7 @@ def test_register_from_another_module_and_duplicates():
 
 
 def test_extra_scene_modules_are_optional_but_not_their_imports(tmp_path, monkeypatch):
-    monkeypatch.setattr(scenes, "EXTRA_SCENE_MODULES", ("splineimu._no_such_scene_module",))
+    monkeypatch.setattr(scenes.base, "EXTRA_SCENE_MODULES", ("splineimu._no_such_scene_module",))
     assert set(BUILTIN) <= set(scene_names())
 
     (tmp_path / "_extra_scenes_ok.py").write_text(
@@ -425,9 +425,9 @@ def test_extra_scene_modules_are_optional_but_not_their_imports(tmp_path, monkey
     (tmp_path / "_extra_scenes_broken.py").write_text("import _no_such_dependency_xyz\n")
     monkeypatch.syspath_prepend(str(tmp_path))
     try:
-        monkeypatch.setattr(scenes, "EXTRA_SCENE_MODULES", ("_extra_scenes_ok",))
+        monkeypatch.setattr(scenes.base, "EXTRA_SCENE_MODULES", ("_extra_scenes_ok",))
         assert isinstance(make_scene("test-extra"), StaticScene)  # loaded lazily by make_scene
-        monkeypatch.setattr(scenes, "EXTRA_SCENE_MODULES", ("_extra_scenes_broken",))
+        monkeypatch.setattr(scenes.base, "EXTRA_SCENE_MODULES", ("_extra_scenes_broken",))
         with pytest.raises(ModuleNotFoundError, match="_no_such_dependency_xyz"):
             scene_names()
     finally:

@@ -1,17 +1,25 @@
-"""File formats: TUM, EuRoC, ROS bags, output folders.
+"""File formats: one reader and one writer per format, atomic outputs.
 
 The names below are re-exported lazily (importing :mod:`splineimu.io` loads nothing
 heavy; the first use of a name imports its module):
 
-- poses: :class:`PoseTrack`, :class:`Gap`, :func:`clean_poses`, :func:`find_gaps`,
-  :func:`split_at_gaps`
-- TUM: :func:`read_tum`, :func:`write_tum`
-- EuRoC: :func:`read_euroc_groundtruth`, :func:`write_euroc_imu`,
-  :func:`write_euroc_groundtruth`
-- stamps: :func:`read_timestamps`, :func:`parse_stamps`
-- output: :class:`OutputFolder`, :func:`check_output_dir`, :func:`atomic_write_text`,
-  :func:`atomic_write_bytes`, :func:`format_table`
-- bags: :func:`write_bag`
+- poses (:mod:`~splineimu.io.poses`): :class:`PoseTrack`, :class:`Gap`, :func:`clean_poses`,
+  :func:`find_gaps`, :func:`split_at_gaps`
+- TUM (:mod:`~splineimu.io.tum`): :func:`read_tum`, :func:`write_tum`, :class:`TumWriter`
+- EuRoC (:mod:`~splineimu.io.euroc`): :func:`read_euroc_groundtruth`, :func:`write_euroc_imu`,
+  :func:`write_euroc_groundtruth`, :class:`EurocImuWriter`, :class:`EurocGroundtruthWriter`
+- stamps (:mod:`~splineimu.io.timestamps`): :func:`read_timestamps`, :func:`parse_stamps`
+- YAML (:mod:`~splineimu.io.yaml`): :func:`read_yaml`, :func:`parse_yaml`, :func:`dump_yaml`,
+  :func:`write_yaml`
+- atomic outputs (:mod:`~splineimu.io.files`): :class:`OutputFolder`, :func:`check_output_dir`,
+  :func:`atomic_write_text`, :func:`atomic_write_bytes`, :func:`staged_path`
+- text tables (:mod:`~splineimu.io.tables`): :func:`format_table`, :func:`write_table`,
+  :class:`TableWriter`
+- ROS bags (:mod:`~splineimu.io.bag`): :func:`write_bag`
+
+A ``*Writer`` writes a file piece by piece into an :class:`OutputFolder` (records too long
+to hold); the ``write_*`` function of the same format writes one whole file atomically. Both
+make the same bytes.
 """
 
 from __future__ import annotations
@@ -26,16 +34,26 @@ _EXPORTS = {
     "split_at_gaps": "poses",
     "read_tum": "tum",
     "write_tum": "tum",
+    "TumWriter": "tum",
     "read_euroc_groundtruth": "euroc",
     "write_euroc_imu": "euroc",
     "write_euroc_groundtruth": "euroc",
+    "EurocImuWriter": "euroc",
+    "EurocGroundtruthWriter": "euroc",
     "read_timestamps": "timestamps",
     "parse_stamps": "timestamps",
-    "OutputFolder": "output",
-    "check_output_dir": "output",
-    "atomic_write_text": "output",
-    "atomic_write_bytes": "output",
-    "format_table": "output",
+    "read_yaml": "yaml",
+    "parse_yaml": "yaml",
+    "dump_yaml": "yaml",
+    "write_yaml": "yaml",
+    "OutputFolder": "files",
+    "check_output_dir": "files",
+    "atomic_write_text": "files",
+    "atomic_write_bytes": "files",
+    "staged_path": "files",
+    "format_table": "tables",
+    "write_table": "tables",
+    "TableWriter": "tables",
     "write_bag": "bag",
 }
 

@@ -10,37 +10,26 @@ nanoseconds; the bag's record time is the header stamp.
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import numpy as np
 
-from ..errors import OutputExistsError
-from .output import _remove, _unique_sibling, replace_path
+from ..errors import InputError, OutputExistsError
+from ..validation import as_quat_xyzw, as_stamps_ns, as_vectors, one_of
+from .files import staged_path
 
 __all__ = ["write_bag", "BAG_KINDS"]
 
 BAG_KINDS = ("ros1", "ros2")
 
 
-def _rows(a, n, width, name):
-    a = np.asarray(a, dtype=np.float64)
-    if a.shape != (n, width):
-        raise ValueError(f"Expected `{name}` to have shape ({n}, {width}), got {a.shape}")
-    if not np.isfinite(a).all():
-        raise ValueError(f"Expected finite values in `{name}`")
-    return a
-
-
-def _stamps(t, name, kind):
-    t = np.asarray(t)
-    if t.ndim != 1 or (t.size and not np.issubdtype(t.dtype, np.integer)):
-        raise ValueError(f"Expected `{name}` to be a 1-D array of integer ns, got {t.dtype} {t.shape}")
-    t = t.astype(np.int64, copy=False)
+def _ros_stamps(t, name, kind):
+    """Integer ns that ROS time can hold (unsigned; ROS 1 seconds are 32 bits)."""
+    t = as_stamps_ns(t, name, increasing=False)
     if t.size and t.min() < 0:
-        raise ValueError(f"Expected `{name}` >= 0 (ROS time is unsigned), got {int(t.min())}")
+        raise InputError(f"Expected `{name}` >= 0 (ROS time is unsigned), got {int(t.min())}")
     if kind == "ros1" and t.size and t.max() // 1_000_000_000 >= 2**32:
-        raise ValueError(f"Expected `{name}` below 2**32 s for ROS 1 time")
+        raise InputError(f"Expected `{name}` below 2**32 s for ROS 1 time")
     return t
 
 
@@ -91,14 +80,15 @@ def write_bag(
     Returns
     -------
     pathlib.Path
-        ``path``.
+        The bag file (ROS 1) or folder (ROS 2) written, ``path``.
 
     Raises
     ------
     OutputExistsError
         ``path`` exists and ``force`` is False.
-    ValueError
-        Unknown ``kind``, bad shapes, non-finite values or negative stamps.
+    ConfigError, InputError
+        (``ValueError`` subclasses) Unknown ``kind``; bad shapes, non-finite values or
+        negative stamps.
 
     Notes
     -----
@@ -116,25 +106,24 @@ def write_bag(
     >>> p.is_file()
     True
     """
-    if kind not in BAG_KINDS:
-        raise ValueError(f"Expected `kind` to be one of {BAG_KINDS}, got {kind!r}")
+    one_of(kind, "kind", BAG_KINDS)
     path = Path(path)
     if (path.exists() or path.is_symlink()) and not force:
         raise OutputExistsError(f"output '{path}' exists; use --force to replace it")
-    t_imu = _stamps(imu_t_ns, "imu_t_ns", kind)
+    t_imu = _ros_stamps(imu_t_ns, "imu_t_ns", kind)
     n = t_imu.shape[0]
-    w = _rows(gyro, n, 3, "gyro")
-    a = _rows(accel, n, 3, "accel")
+    w = as_vectors(gyro, "gyro", n)
+    a = as_vectors(accel, "accel", n)
     with_poses = gt_t_ns is not None
     if with_poses:
         if positions is None or quat_xyzw is None:
-            raise ValueError("`gt_t_ns` needs `positions` and `quat_xyzw` too")
-        t_gt = _stamps(gt_t_ns, "gt_t_ns", kind)
+            raise InputError("`gt_t_ns` needs `positions` and `quat_xyzw` too")
+        t_gt = _ros_stamps(gt_t_ns, "gt_t_ns", kind)
         m = t_gt.shape[0]
-        p = _rows(positions, m, 3, "positions")
-        q = _rows(quat_xyzw, m, 4, "quat_xyzw")
+        p = as_vectors(positions, "positions", m)
+        q = as_quat_xyzw(quat_xyzw, "quat_xyzw", m)
     elif positions is not None or quat_xyzw is not None:
-        raise ValueError("`positions` and `quat_xyzw` need `gt_t_ns`")
+        raise InputError("`positions` and `quat_xyzw` need `gt_t_ns`")
 
     from rosbags.typesys import Stores, get_typestore
 
@@ -178,11 +167,7 @@ def write_bag(
 
     # build the bag under its final name inside a hidden sibling folder (rosbag2 names
     # its storage file after the folder), then rename it into place
-    tmp_parent = _unique_sibling(path, "tmp")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    os.mkdir(tmp_parent)
-    tmp = tmp_parent / path.name
-    try:
+    with staged_path(path) as tmp:
         if kind == "ros1":
             from rosbags.rosbag1 import Writer
 
@@ -217,7 +202,4 @@ def write_bag(
                                   orientation=Quaternion(x=qx, y=qy, z=qz, w=qw)),
                     )
                     writer.write(c_pose, t, serialize(msg, pose_type))
-        replace_path(tmp, path)
-    finally:
-        _remove(tmp_parent)
     return path

@@ -8,18 +8,19 @@ API uses ``quat_xyzw`` and converts here, at the file boundary.
 
 from __future__ import annotations
 
-import itertools
-
 import numpy as np
 
-from .output import atomic_write_bytes, format_table_chunks
-from .poses import PoseTrack, clean_poses
-from .timestamps import _is_integer_text, parse_stamps, read_table
+from ..validation import as_quat_xyzw, as_stamps_ns, as_vectors
+from .poses import PoseTrack, track_from_table
+from .tables import TableWriter, write_table
+from .timestamps import _is_integer_text, read_table
 
 __all__ = [
     "read_euroc_groundtruth",
     "write_euroc_imu",
     "write_euroc_groundtruth",
+    "EurocImuWriter",
+    "EurocGroundtruthWriter",
     "EUROC_IMU_HEADER",
     "EUROC_GROUNDTRUTH_HEADER",
 ]
@@ -94,61 +95,51 @@ def read_euroc_groundtruth(path, min_poses: int = 2, repeated_stamps: str = "err
 
     Examples
     --------
+    Eight columns, quaternion w first:
+
     >>> import tempfile, pathlib
-    >>> p = pathlib.Path(tempfile.mkdtemp()) / "gt.csv"
-    >>> _ = p.write_text("#timestamp, p x, p y, p z, q w, q x, q y, q z\\n"
-    ...                  "1403715524907143168,1,2,3,1,0,0,0\\n"
-    ...                  "1403715524912143104,1,2,3,0,0,0,1\\n")
-    >>> tr = read_euroc_groundtruth(p)
-    >>> tr.t_ns[0], tr.quat_xyzw.tolist()
+    >>> rows = ["#timestamp, p x, p y, p z, q w, q x, q y, q z",
+    ...         "1403715524907143168,1,2,3,1,0,0,0", "1403715524912143104,1,2,3,0,0,0,1"]
+    >>> csv = pathlib.Path(tempfile.mkdtemp(), "gt.csv")
+    >>> _ = csv.write_text("\\n".join(rows) + "\\n")
+    >>> gt = read_euroc_groundtruth(csv)
+    >>> gt.t_ns[0], gt.quat_xyzw.tolist()
     (np.int64(1403715524907143168), [[0.0, 0.0, 0.0, 1.0], [0.0, 0.0, 1.0, 0.0]])
     """
     table = read_table(
         path, n_cols=8, column_names=_NAMES_17, sep=",", allow_header=True, wide_cols=17
     )
-    n_cols = table.n_cols
     notices = []
-    extra = table.extra_columns_notice()
-    if extra:
-        notices.append(extra)
     unit = "ns" if all(_is_integer_text(s) for s in table.stamps) else "s"
     if unit == "s":
         notices.append("timestamps have a decimal point: read as seconds, not EuRoC's nanoseconds")
-    t_ns, n_rounded = parse_stamps(table.stamps, unit, path=path, line_numbers=table.line_numbers)
-    if n_rounded:
-        notices.append(f"rounded {n_rounded} timestamps with more than 9 decimals to the nearest ns")
     v = table.values
-    quat_xyzw = v[:, [4, 5, 6, 3]]
     kw = {}
-    if n_cols == 17:
+    if table.n_cols == 17:
         kw = dict(velocity_world=v[:, 7:10], bias_gyro=v[:, 10:13], bias_accel=v[:, 13:16])
-    return clean_poses(
-        t_ns,
-        v[:, 0:3],
-        quat_xyzw,
-        path=path,
-        line_numbers=table.line_numbers,
-        notices=notices,
-        min_poses=min_poses,
-        repeated_stamps=repeated_stamps,
-        **kw,
-    )
+    return track_from_table(table, unit, v[:, [4, 5, 6, 3]], path=path, notices=notices, min_poses=min_poses,
+                            repeated_stamps=repeated_stamps, **kw)
 
 
-def _rows(a, n, width, name):
-    a = np.asarray(a, dtype=np.float64)
-    if a.shape != (n, width):
-        raise ValueError(f"Expected `{name}` to have shape ({n}, {width}), got {a.shape}")
-    return a
+def _imu_table(t_ns, gyro, accel):
+    """Stamps and the ``(N, 6)`` columns of EuRoC imu lines, checked (``-0.0`` becomes ``0``)."""
+    t = as_stamps_ns(t_ns, increasing=False)
+    n = t.shape[0]
+    return t, np.hstack([as_vectors(gyro, "gyro", n), as_vectors(accel, "accel", n)]) + 0.0
 
 
-def _stamps(t_ns):
-    t = np.asarray(t_ns)
-    if t.ndim != 1:
-        raise ValueError(f"Expected `t_ns` to have shape (N,), got {t.shape}")
-    if t.size and not np.issubdtype(t.dtype, np.integer):
-        raise ValueError(f"Expected `t_ns` to be integer nanoseconds, got dtype {t.dtype}")
-    return t.astype(np.int64, copy=False)
+def _groundtruth_table(t_ns, positions, quat_xyzw, velocity_world, bias_gyro, bias_accel):
+    """Stamps and the ``(N, 16)`` columns of EuRoC ground-truth lines (quaternion w first), checked."""
+    t = as_stamps_ns(t_ns, increasing=False)
+    n = t.shape[0]
+    q = as_quat_xyzw(quat_xyzw, "quat_xyzw", n)
+    return t, np.hstack([
+        as_vectors(positions, "positions", n),
+        q[:, [3, 0, 1, 2]],
+        as_vectors(velocity_world, "velocity_world", n),
+        as_vectors(bias_gyro, "bias_gyro", n),
+        as_vectors(bias_accel, "bias_accel", n),
+    ])
 
 
 def write_euroc_imu(path, t_ns, gyro, accel, header: str | None = None):
@@ -172,10 +163,19 @@ def write_euroc_imu(path, t_ns, gyro, accel, header: str | None = None):
     -------
     pathlib.Path
 
+    Raises
+    ------
+    InputError
+        (a ``ValueError``) Shapes that do not match or non-finite values.
+
+    See Also
+    --------
+    EurocImuWriter : the same lines, written piece by piece.
+
     Notes
     -----
-    Values are written losslessly (see :func:`splineimu.io.output.format_table`);
-    about 1.3 s of CPU per million rows (measured).
+    Values are written losslessly (see :func:`splineimu.io.tables.format_table`), a
+    negative zero as ``0``; about 1.3 s of CPU per million rows (measured).
 
     Examples
     --------
@@ -185,11 +185,8 @@ def write_euroc_imu(path, t_ns, gyro, accel, header: str | None = None):
     >>> print(p.read_text().splitlines()[1])
     1403715523912140000,0,0.1,-0.2,0,0,9.81
     """
-    t = _stamps(t_ns)
-    n = t.shape[0]
-    body = format_table_chunks(t, np.hstack([_rows(gyro, n, 3, "gyro"), _rows(accel, n, 3, "accel")]))
-    head = EUROC_IMU_HEADER if header is None else header
-    return atomic_write_bytes(path, itertools.chain([(head + "\n").encode()], body))
+    t, table = _imu_table(t_ns, gyro, accel)
+    return write_table(path, t, table, EUROC_IMU_HEADER if header is None else header)
 
 
 def write_euroc_groundtruth(path, t_ns, positions, quat_xyzw, velocity_world, bias_gyro, bias_accel):
@@ -215,6 +212,10 @@ def write_euroc_groundtruth(path, t_ns, positions, quat_xyzw, velocity_world, bi
     -------
     pathlib.Path
 
+    See Also
+    --------
+    EurocGroundtruthWriter : the same lines, written piece by piece.
+
     Notes
     -----
     The header is EuRoC's, byte for byte (:data:`EUROC_GROUNDTRUTH_HEADER`). Values are
@@ -229,15 +230,42 @@ def write_euroc_groundtruth(path, t_ns, positions, quat_xyzw, velocity_world, bi
     >>> print(p.read_text().splitlines()[1])
     5,1,2,3,1,0,0,0,0,0,0,0,0,0,0,0,0
     """
-    t = _stamps(t_ns)
-    n = t.shape[0]
-    q = _rows(quat_xyzw, n, 4, "quat_xyzw")
-    table = np.hstack([
-        _rows(positions, n, 3, "positions"),
-        q[:, [3, 0, 1, 2]],
-        _rows(velocity_world, n, 3, "velocity_world"),
-        _rows(bias_gyro, n, 3, "bias_gyro"),
-        _rows(bias_accel, n, 3, "bias_accel"),
-    ])
-    body = format_table_chunks(t, table)
-    return atomic_write_bytes(path, itertools.chain([(EUROC_GROUNDTRUTH_HEADER + "\n").encode()], body))
+    t, table = _groundtruth_table(t_ns, positions, quat_xyzw, velocity_world, bias_gyro, bias_accel)
+    return write_table(path, t, table, EUROC_GROUNDTRUTH_HEADER)
+
+
+class EurocImuWriter(TableWriter):
+    """An EuRoC ``imu0/data.csv`` written piece by piece (see :func:`write_euroc_imu`).
+
+    A new file (created exclusively, for an :class:`~splineimu.io.files.OutputFolder`'s
+    temporary folder); pieces are formatted in background threads while the caller
+    computes the next ones.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "data.csv"
+    >>> with EurocImuWriter(p) as w:
+    ...     w.write_samples([1000, 2000], [[0.0, 0.0, -0.0]] * 2, [[0.0, 0.0, 9.81]] * 2)
+    >>> p.read_text().splitlines()[1:]
+    ['1000,0,0,0,0,0,9.81', '2000,0,0,0,0,0,9.81']
+    """
+
+    def __init__(self, path, header: str | None = None):
+        super().__init__(path, EUROC_IMU_HEADER if header is None else header)
+
+    def write_samples(self, t_ns, gyro, accel) -> None:
+        """Append samples (arguments as for :func:`write_euroc_imu`)."""
+        self.write(*_imu_table(t_ns, gyro, accel))
+
+
+class EurocGroundtruthWriter(TableWriter):
+    """An EuRoC ``state_groundtruth_estimate0/data.csv`` written piece by piece (see
+    :func:`write_euroc_groundtruth`, whose arguments :meth:`write_states` takes)."""
+
+    def __init__(self, path):
+        super().__init__(path, EUROC_GROUNDTRUTH_HEADER)
+
+    def write_states(self, t_ns, positions, quat_xyzw, velocity_world, bias_gyro, bias_accel) -> None:
+        """Append states (arguments as for :func:`write_euroc_groundtruth`)."""
+        self.write(*_groundtruth_table(t_ns, positions, quat_xyzw, velocity_world, bias_gyro, bias_accel))

@@ -24,7 +24,8 @@ import numpy as np
 
 from ..errors import InputError
 from ..lie import quat_make_continuous
-from .timestamps import format_ns
+from ..validation import as_vectors, one_of, positive_float
+from .timestamps import format_ns, parse_stamps
 
 __all__ = ["PoseTrack", "Gap", "clean_poses", "find_gaps", "split_at_gaps", "NORM_NOTICE_TOL"]
 
@@ -83,12 +84,12 @@ class PoseTrack:
     def __post_init__(self):
         self.t_ns = np.ascontiguousarray(self.t_ns, dtype=np.int64)
         n = self.t_ns.shape[0]
-        self.positions = _as_rows(self.positions, 3, n, "positions")
-        self.quat_xyzw = _as_rows(self.quat_xyzw, 4, n, "quat_xyzw")
+        self.positions = as_vectors(self.positions, "positions", n, 3, finite=False)
+        self.quat_xyzw = as_vectors(self.quat_xyzw, "quat_xyzw", n, 4, finite=False)
         for name in _EXTRA_FIELDS:
             v = getattr(self, name)
             if v is not None:
-                setattr(self, name, _as_rows(v, 3, n, name))
+                setattr(self, name, as_vectors(v, name, n, 3, finite=False))
         if self.line_numbers is None:
             self.line_numbers = np.arange(1, n + 1, dtype=np.int64)
         else:
@@ -137,13 +138,6 @@ class PoseTrack:
             bias_accel=pick(self.bias_accel),
             line_numbers=pick(self.line_numbers),
         )
-
-
-def _as_rows(a, width, n, name):
-    a = np.ascontiguousarray(a, dtype=np.float64)
-    if a.shape != (n, width):
-        raise ValueError(f"Expected `{name}` to have shape ({n}, {width}), got {a.shape}")
-    return a
 
 
 def _lines_text(lines, limit=5) -> str:
@@ -218,16 +212,15 @@ def clean_poses(
     ['normalized 1 quaternion whose norm differed from 1 by more than 0.001 (worst: 2 on line 4)',
      'dropped 1 exact duplicate row (line 3)']
     """
-    if repeated_stamps not in ("error", "first"):
-        raise ValueError(f"Expected `repeated_stamps` to be 'error' or 'first', got {repeated_stamps!r}")
+    one_of(repeated_stamps, "repeated_stamps", ("error", "first"))
     t = np.ascontiguousarray(t_ns, dtype=np.int64)
     n = t.shape[0]
-    p = _as_rows(positions, 3, n, "positions")
-    q = _as_rows(quat_xyzw, 4, n, "quat_xyzw")
+    p = as_vectors(positions, "positions", n, 3, finite=False)
+    q = as_vectors(quat_xyzw, "quat_xyzw", n, 4, finite=False)
     extras = {}
     for name, v in zip(_EXTRA_FIELDS, (velocity_world, bias_gyro, bias_accel)):
         if v is not None:
-            extras[name] = _as_rows(v, 3, n, name)
+            extras[name] = as_vectors(v, name, n, 3, finite=False)
     ln = np.arange(1, n + 1, dtype=np.int64) if line_numbers is None else np.asarray(line_numbers, np.int64)
     notices = [] if notices is None else list(notices)
     spath = None if path is None else str(path)
@@ -235,7 +228,7 @@ def clean_poses(
     def fail(msg, i=None):
         raise InputError(msg, path=spath, line=None if i is None else int(ln[i]))
 
-    # 1. finiteness, in line order
+    # 1. finiteness, in line order (so that the message names the file line)
     blocks = [("position", p), ("quaternion", q)] + [
         (name.replace("_", " "), v) for name, v in extras.items()
     ]
@@ -375,8 +368,7 @@ def find_gaps(t_ns, max_gap_s: float, line_numbers=None) -> list[Gap]:
             line_numbers = t_ns.line_numbers
         t_ns = t_ns.t_ns
     t = np.asarray(t_ns, dtype=np.int64)
-    if not np.isfinite(max_gap_s) or max_gap_s <= 0:
-        raise ValueError(f"Expected `max_gap_s` > 0, got {max_gap_s}")
+    max_gap_s = positive_float(max_gap_s, "max_gap_s")
     d = np.diff(t)
     # compare in integer ns (the threshold rounded to the nearest ns)
     idx = np.flatnonzero(d > int(round(max_gap_s * 1e9))) + 1
@@ -421,3 +413,24 @@ def split_at_gaps(track: PoseTrack, gaps) -> list[PoseTrack]:
         raise ValueError(f"Expected gap indices in 1..{len(track) - 1}, got {cuts}")
     bounds = [0] + cuts + [len(track)]
     return [track.subset(slice(a, b)) for a, b in zip(bounds[:-1], bounds[1:])]
+
+
+def track_from_table(table, unit: str, quat_xyzw, *, path, notices=(), min_poses: int = 2,
+                     repeated_stamps: str = "error", **extras) -> PoseTrack:
+    """A :class:`PoseTrack` from a pose file's :class:`~splineimu.io.timestamps.Table`.
+
+    The common end of every pose reader: stamps parsed exactly in ``unit``, positions from
+    the first three value columns, ``quat_xyzw`` (the reader's own column order already turned
+    into ``x, y, z, w``) and any ``extras`` (``velocity_world``...), then :func:`clean_poses`.
+    Notices about ignored extra columns and rounded stamps come first and last.
+    """
+    notices = list(notices)
+    extra = table.extra_columns_notice()
+    if extra:
+        notices.insert(0, extra)
+    t_ns, n_rounded = parse_stamps(table.stamps, unit, path=path, line_numbers=table.line_numbers)
+    if n_rounded:
+        where = "every timestamp" if n_rounded == len(t_ns) else f"{n_rounded} timestamps"
+        notices.append(f"rounded {where} with more than 9 decimals to the nearest ns")
+    return clean_poses(t_ns, table.values[:, 0:3], quat_xyzw, path=path, line_numbers=table.line_numbers,
+                       notices=notices, min_poses=min_poses, repeated_stamps=repeated_stamps, **extras)

@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
+from ..validation import one_of
 
 __all__ = ["parse_stamps", "read_timestamps", "read_table", "Table"]
 
@@ -109,8 +110,7 @@ def parse_stamps(strings, unit: str = "s", *, path=None, line_numbers=None):
     >>> parse_stamps(["1403715524907143168"], unit="ns")[0].tolist()
     [1403715524907143168]
     """
-    if unit not in ("s", "ns"):
-        raise ValueError(f"Expected `unit` to be 's' or 'ns', got {unit!r}")
+    one_of(unit, "unit", ("s", "ns"))
     strings = list(strings)
     n = len(strings)
     t_ns = np.zeros(n, dtype=np.int64)
@@ -415,8 +415,7 @@ def read_timestamps(path, unit: str | None = None) -> np.ndarray:
     >>> read_timestamps(p).tolist()
     [1403715523912140000, 1403715523917140000]
     """
-    if unit not in (None, "ns", "s"):
-        raise ValueError(f"Expected `unit` to be None, 'ns' or 's', got {unit!r}")
+    one_of(unit, "unit", (None, "ns", "s"))
     table = _read_first_column(path)
     stamps = table.stamps
     if unit is None:

@@ -7,15 +7,14 @@ and the Hamilton quaternion ``world_R_body`` with ``w`` last.
 
 from __future__ import annotations
 
-import itertools
-
 import numpy as np
 
-from .output import atomic_write_bytes, format_table_chunks
-from .poses import PoseTrack, clean_poses
-from .timestamps import parse_stamps, read_table
+from ..validation import as_quat_xyzw, as_stamps_ns, as_vectors
+from .poses import PoseTrack, track_from_table
+from .tables import TableWriter, write_table
+from .timestamps import read_table
 
-__all__ = ["read_tum", "write_tum", "TUM_COLUMNS", "TUM_HEADER"]
+__all__ = ["read_tum", "write_tum", "TumWriter", "TUM_COLUMNS", "TUM_HEADER"]
 
 TUM_COLUMNS = ("timestamp", "tx", "ty", "tz", "qx", "qy", "qz", "qw")
 TUM_HEADER = "# timestamp tx ty tz qx qy qz qw"
@@ -70,25 +69,15 @@ def read_tum(path, min_poses: int = 2, repeated_stamps: str = "error") -> PoseTr
     ([1305031102175304000, 1305031102185304000], [2, 3])
     """
     table = read_table(path, n_cols=8, column_names=TUM_COLUMNS, sep="auto")
-    notices = []
-    extra = table.extra_columns_notice()
-    if extra:
-        notices.append(extra)
-    t_ns, n_rounded = parse_stamps(table.stamps, "s", path=path, line_numbers=table.line_numbers)
-    if n_rounded:
-        where = "every timestamp" if n_rounded == len(t_ns) else f"{n_rounded} timestamps"
-        notices.append(f"rounded {where} with more than 9 decimals to the nearest ns")
-    v = table.values
-    return clean_poses(
-        t_ns,
-        v[:, 0:3],
-        v[:, 3:7],
-        path=path,
-        line_numbers=table.line_numbers,
-        notices=notices,
-        min_poses=min_poses,
-        repeated_stamps=repeated_stamps,
-    )
+    return track_from_table(table, "s", table.values[:, 3:7], path=path, min_poses=min_poses,
+                            repeated_stamps=repeated_stamps)
+
+
+def _tum_table(t_ns, positions, quat_xyzw):
+    """Stamps and the ``(N, 7)`` value columns of TUM lines, checked."""
+    t = as_stamps_ns(t_ns, increasing=False)
+    n = t.shape[0]
+    return t, np.hstack([as_vectors(positions, "positions", n), as_quat_xyzw(quat_xyzw, "quat_xyzw", n)])
 
 
 def write_tum(path, t_ns, positions, quat_xyzw, header: bool = True):
@@ -109,36 +98,73 @@ def write_tum(path, t_ns, positions, quat_xyzw, header: bool = True):
     Returns
     -------
     pathlib.Path
-        ``path``.
+        The file written.
 
     Raises
     ------
-    ValueError
-        Shapes that do not match or non-finite values.
+    InputError
+        (a ``ValueError``) Shapes that do not match, non-finite values, a zero quaternion.
+
+    See Also
+    --------
+    TumWriter : the same lines, written piece by piece.
 
     Notes
     -----
     Values are written losslessly (``float(text) == value``): the shortest decimal of up
     to 15 significant digits that reads back exactly, else 17 digits; see
-    :func:`splineimu.io.output.format_table`.
+    :func:`splineimu.io.tables.format_table`.
 
     Examples
     --------
+    A round trip gives back the exact stamps and values:
+
     >>> import tempfile, pathlib, numpy as np
     >>> p = pathlib.Path(tempfile.mkdtemp()) / "out.tum"
-    >>> _ = write_tum(p, [1305031102175304000], [[0.1, 2.0, -3.5]], [[0.0, 0.0, 0.0, 1.0]])
+    >>> t_ns = [1305031102175304000, 1305031102185304001]
+    >>> q = [[0.0, 0.0, 0.0, 1.0], [0.0, 0.0, np.sin(0.05), np.cos(0.05)]]
+    >>> _ = write_tum(p, t_ns, [[0.1, 2.0, -3.5], [0.2, 2.0, -3.5]], q)
+    >>> print(p.read_text().splitlines()[1])
+    1305031102.175304000 0.1 2 -3.5 0 0 0 1
+    >>> back = read_tum(p)
+    >>> back.t_ns.tolist() == t_ns, back.positions[1].tolist(), bool((back.quat_xyzw == q).all())
+    (True, [0.2, 2.0, -3.5], True)
+    """
+    t, table = _tum_table(t_ns, positions, quat_xyzw)
+    return write_table(path, t, table, TUM_HEADER if header else None, sep=" ", stamp="s")
+
+
+class TumWriter(TableWriter):
+    """A TUM trajectory file written piece by piece, for records too long to hold at once.
+
+    The same lines as :func:`write_tum`, into a new file (created exclusively; meant for an
+    :class:`~splineimu.io.files.OutputFolder`'s temporary folder, which makes the output
+    atomic). Pieces are formatted in background threads; :meth:`close` (or the end of a
+    ``with`` block) writes the rest.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        New file.
+    header : bool, default True
+        Start with ``# timestamp tx ty tz qx qy qz qw``.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "poses.tum"
+    >>> with TumWriter(p) as w:
+    ...     w.write_poses([0], [[0.0, 0.0, 1.0]], [[0.0, 0.0, 0.0, 1.0]])
+    ...     w.write_poses([5_000_000], [[0.5, 0.0, 1.0]], [[0.0, 0.0, 0.0, 1.0]])
     >>> print(p.read_text(), end="")
     # timestamp tx ty tz qx qy qz qw
-    1305031102.175304000 0.1 2 -3.5 0 0 0 1
+    0.000000000 0 0 1 0 0 0 1
+    0.005000000 0.5 0 1 0 0 0 1
     """
-    t = np.asarray(t_ns)
-    n = t.shape[0] if t.ndim == 1 else -1
-    p = np.asarray(positions, dtype=np.float64)
-    q = np.asarray(quat_xyzw, dtype=np.float64)
-    if p.shape != (n, 3):
-        raise ValueError(f"Expected `positions` to have shape ({n}, 3), got {p.shape}")
-    if q.shape != (n, 4):
-        raise ValueError(f"Expected `quat_xyzw` to have shape ({n}, 4), got {q.shape}")
-    body = format_table_chunks(t, np.hstack([p, q]), sep=" ", stamp="s")
-    head = (TUM_HEADER + "\n").encode() if header else b""
-    return atomic_write_bytes(path, itertools.chain([head], body))
+
+    def __init__(self, path, header: bool = True):
+        super().__init__(path, TUM_HEADER if header else None, sep=" ", stamp="s")
+
+    def write_poses(self, t_ns, positions, quat_xyzw) -> None:
+        """Append poses (arguments as for :func:`write_tum`)."""
+        self.write(*_tum_table(t_ns, positions, quat_xyzw))

@@ -37,8 +37,9 @@ import math
 
 import numpy as np
 
-from .errors import ConfigError
-from .scenes import Param, Scene, _rz, register_scene
+from ..errors import ConfigError
+from .base import Param, Scene, register_scene
+from .kinematics import rotation_z
 
 __all__ = ["CalibrationScene", "SixPositionScene", "RateTableScene", "min_jerk", "nominal_up_rotation"]
 
@@ -92,7 +93,7 @@ def nominal_up_rotation(axis: int, sign: int) -> np.ndarray:
 
 def _rotvec_between(Ra, Rb):
     """Rotation vector ``rho`` with ``Ra Exp(rho) = Rb`` (body frame of ``Ra``)."""
-    from .lie import so3_log
+    from ..lie import so3_log
 
     return np.asarray(so3_log(Ra.T @ Rb), dtype=np.float64)
 
@@ -120,6 +121,12 @@ class CalibrationScene(Scene):
         Length of the schedule [s].
     """
 
+    def __init_subclass__(cls, **kwargs):
+        # the orientation-error parameters are shared: document them once, in every subclass
+        super().__init_subclass__(**kwargs)
+        if cls.__doc__ and "tilt_sigma_deg" in cls.PARAMS and "tilt_seed :" not in cls.__doc__:
+            cls.__doc__ = cls.__doc__.rstrip() + "\n" + _TILT_DOC + "    "
+
     def __init__(self, duration_s=None, t0_ns: int = 0, **params):
         self._duration_given = duration_s is not None
         super().__init__(duration_s=duration_s, t0_ns=t0_ns, **params)
@@ -146,7 +153,7 @@ class CalibrationScene(Scene):
         raise NotImplementedError
 
     def _mount(self, k: int, axis: int, sign: int) -> np.ndarray:
-        from .lie import so3_exp
+        from ..lie import so3_exp
 
         return np.asarray(so3_exp(self.tilts_rad[k]), dtype=np.float64) @ nominal_up_rotation(axis, sign)
 
@@ -194,7 +201,7 @@ class CalibrationScene(Scene):
 
     # ---------------------------------------------------------------- evaluation
     def _evaluate(self, t):
-        from .lie import so3_exp
+        from ..lie import so3_exp
 
         n = t.shape[0]
         R = np.empty((n, 3, 3))
@@ -231,12 +238,20 @@ class CalibrationScene(Scene):
                 after = t[m] > seg["t0"] + T
                 rate = np.where(after, 0.0, rate)
                 acc = np.where(after, 0.0, acc)
-                R[m] = _rz(phi) @ seg["Rm"]
+                R[m] = rotation_z(phi) @ seg["Rm"]
                 w[m] = rate[:, None] * u[None, :]
                 al[m] = acc[:, None] * u[None, :]
         z = np.zeros((n, 3))
         return z, z.copy(), z.copy(), R, w, al
 
+
+_TILT_DOC = """\
+    tilt_sigma_deg : float, default 0
+        Orientation error [deg]: std of each component of the random world-frame rotation
+        vector ``eps`` of every position / mount.
+    tilt_seed : float, default 0
+        Seed [1] (a whole number) of ``numpy.random.default_rng`` for ``eps``.
+"""
 
 _TILT_PARAMS = {
     "tilt_sigma_deg": Param(0.0, "deg", "orientation error: std of each world-frame rotation-vector "
@@ -262,7 +277,7 @@ class SixPositionScene(CalibrationScene):
                   omega_body = s'(tau)/T rho_k,  alpha_body = s''(tau)/T^2 rho_k
         p = v = accel_world = 0                   (so f_b = R^T (0, 0, g))
 
-    with the minimum-jerk ``s`` of :mod:`splineimu.calibration_scenes` and ``eps_k`` the
+    with the minimum-jerk ``s`` of :mod:`splineimu.scenes.calibration` and ``eps_k`` the
     orientation errors (``tilt_sigma_deg``, ``tilt_seed``; zero by default). At rest in
     position k the accelerometer reads ``g R_k^T e_z``: ``+-g`` on the axis that is up.
 
@@ -275,11 +290,6 @@ class SixPositionScene(CalibrationScene):
         Time at rest in each position [s], > 0.
     transition_s : float, default 2
         Duration of each turn [s], > 0.
-    tilt_sigma_deg : float, default 0
-        Orientation error [deg]: std of each component of every position's random world-frame
-        rotation vector ``eps_k``.
-    tilt_seed : float, default 0
-        Seed [1] (a whole number) of ``numpy.random.default_rng`` for ``eps``.
     """
 
     DEFAULT_DURATION_S = 70.0
@@ -340,11 +350,6 @@ class RateTableScene(CalibrationScene):
         Duration of each rate change [s], > 0.
     transition_s : float, default 3
         Duration of the turn to the next mount [s], > 0.
-    tilt_sigma_deg : float, default 0
-        Mount error [deg]: std of each component of every mount's random world-frame rotation
-        vector ``eps_i``.
-    tilt_seed : float, default 0
-        Seed [1] (a whole number) of ``numpy.random.default_rng`` for ``eps``.
     """
 
     DEFAULT_DURATION_S = 104.0
@@ -378,8 +383,8 @@ class RateTableScene(CalibrationScene):
             t, phi = self._add_spin(t, D, Rm, phi, -r, -r)
             t, phi = self._add_spin(t, Tr, Rm, phi, -r, 0.0)
             if i + 1 < len(mounts):
-                R_end = _rz(phi) @ Rm
-                nxt = _rz(phi) @ mounts[i + 1]
+                R_end = rotation_z(phi) @ Rm
+                nxt = rotation_z(phi) @ mounts[i + 1]
                 t = self._add_turn(t, T, R_end, nxt)  # the next mount at the table angle reached
         Rl = mounts[-1]
         self._add_phase(t, Dr, Rl, 0.0)
