@@ -28,6 +28,8 @@
       plot: true
       force: false
       tum: poses.tum              # scenes only: their poses at the IMU rate
+    vary:                         # optional: Monte-Carlo batches (splineimu.api.variants)
+      imu.model.gyroscope_noise_density: {normal: [1.8e-4, 2.0e-5]}
 
 The file builds a :class:`~splineimu.api.options.SynthesisJob`, the same object the command-line
 flags build; every value is checked with the file and line it stands on. Only what the file

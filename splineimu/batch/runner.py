@@ -57,8 +57,8 @@ class BatchResult:
     workers : int
         Workers of the cluster.
     time_per_run_s : float or None
-        Steady-state wall time per run: time between the first and the last completion divided
-        by the runs completed in between (None with fewer than three runs).
+        Steady-state wall time per run: once every worker has completed its first run, the time
+        to the last completion divided by the runs completed in between (None with few runs).
     worker_time_per_run_s : float or None
         Mean time one run took inside its worker.
     wall_s : float
