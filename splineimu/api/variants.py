@@ -64,6 +64,8 @@ def _resolve(base: Path, value: str) -> Path:
 def _expander(base: Path):
     """``expand(path, value)`` for :func:`~splineimu.batch.vary.set_dotted`: blocks given by name or file, or absent."""
 
+    from .scenefile import KEYS
+
     def expand(path, value):
         if path == "imu.model" and (value is None or isinstance(value, str)):
             if value is None:
@@ -78,11 +80,17 @@ def _expander(base: Path):
 
             e = Extrinsic() if value is None else Extrinsic.from_file(str(_resolve(base, value)))
             return {"translation": e.body_t_sensor.tolist(), "quat_xyzw": matrix_to_quat_xyzw(e.body_R_sensor).tolist()}
-        if path in ("motion.params", "motion.spline") and value is None:
-            return {}
+        if value is None and (path == "motion.params" or tuple(path.split(".")) in KEYS):
+            return {}  # an absent optional block of the format
         return None
 
     return expand
+
+
+def _index(run_index) -> int:
+    from ..validation import int_in_range
+
+    return int_in_range(run_index, "run index", 0, 2**63 - 1)
 
 
 @dataclass
@@ -158,11 +166,11 @@ class SceneFile:
         """The varied values of run ``run_index`` (``{dotted key: value}``), or the nominal ones."""
         if run_index is None:
             return nominal_values(self.vary)
-        return draws_for_run(self.vary, self._seed(), run_index)
+        return draws_for_run(self.vary, self._seed(), _index(run_index))
 
     def run_seed(self, run_index: int) -> int:
         """The seed of run ``run_index`` (it replaces the file's ``seed``)."""
-        return run_seed(self._seed(), run_index)
+        return run_seed(self._seed(), _index(run_index))
 
     def _seed(self) -> int:
         if self.seed is None:

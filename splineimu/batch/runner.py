@@ -223,6 +223,7 @@ def run_batch(scene_file, runs: int, out_dir, *, workers: int | None = None, sch
 
     from ..api.synthesis import prepare_motion
     from ..api.variants import SceneFile
+    from ..io.output import atomic_write_text
     from ..validation import int_in_range
     from .cluster import dask_client, map_runs
 
@@ -248,7 +249,7 @@ def run_batch(scene_file, runs: int, out_dir, *, workers: int | None = None, sch
             shutil.rmtree(out) if out.is_dir() else out.unlink()
         runs_dir = out / "runs"
         runs_dir.mkdir(parents=True, exist_ok=True)
-        (out / MANIFEST).write_text(json.dumps(manifest, indent=1) + "\n")
+        atomic_write_text(out / MANIFEST, json.dumps(manifest, indent=1) + "\n")
         _clear_temporaries(runs_dir)
         todo = []
         for k in range(runs):
