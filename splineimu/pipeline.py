@@ -29,10 +29,18 @@ class Synthesis:
     t_ns : (N,) int64 stamps
     gyro_rad_s, accel_m_s2 : (N, 3) measured (noise-free when no sensor model was given)
     bias_gyro_rad_s, bias_accel_m_s2 : (N, 3) true biases
-    ideal : IdealImu (noise-free measurement and sensor ground truth)
+    ideal : IdealImu (noise-free measurement and sensor ground truth, at the true times)
     imu_config : the ImuConfig used, or None
     seed : int or None
     applied : names of the sensor-model components applied
+    true_ns : (N,) int64 or None
+        True times of the samples (the ground truth's clock) when the IMU has a timing model;
+        None: the stamps are the true times.
+    vibration_gyro_rad_s, vibration_accel_m_s2 : (N, 3) or None
+        The vibration added before the sensor model (interval means for ``sampling="mean"``).
+    sample_times : SampleTimes or None
+        The timing realization (dropped samples, ...).
+    vibration_model : VibrationModel or None
     """
 
     t_ns: np.ndarray
@@ -49,6 +57,16 @@ class Synthesis:
     sampling: str = "point"
     delta_angle: np.ndarray | None = None
     delta_velocity: np.ndarray | None = None
+    true_ns: np.ndarray | None = None
+    vibration_gyro_rad_s: np.ndarray | None = None
+    vibration_accel_m_s2: np.ndarray | None = None
+    sample_times: object = None
+    vibration_model: object = None
+
+    @property
+    def t_true_ns(self) -> np.ndarray:
+        """True times of the samples (the stamps when there is no timing model)."""
+        return self.t_ns if self.true_ns is None else self.true_ns
 
     def to_dataframe(self):
         import pandas as pd
@@ -77,9 +95,8 @@ def _interval_starts(source, t_s, prev_s=None):
     return np.maximum(start, source.t_min_s)
 
 
-def mean_ideal(source, t_s, gravity, extrinsic, prev_s=None):
-    """Ideal gyro and specific force averaged over each interval ``[t_{k-1}, t_k]`` (Gauss-Legendre)."""
-    a = _interval_starts(source, t_s, prev_s)
+def mean_ideal(source, t_s, gravity, extrinsic, a):
+    """Ideal gyro and specific force averaged over each interval ``[a_k, t_k]`` (Gauss-Legendre)."""
     x, w = np.polynomial.legendre.leggauss(MEAN_NODES)
     h = 0.5 * (t_s - a)
     nodes = (0.5 * (t_s + a))[:, None] + h[:, None] * x[None, :]
@@ -90,12 +107,11 @@ def mean_ideal(source, t_s, gravity, extrinsic, prev_s=None):
     return gyro, acc
 
 
-def increments(source, t_s, gravity, extrinsic, ideal_at_stamps, prev_s=None):
-    """Exact delta-angle ``Log(R_s(t_{k-1})^T R_s(t_k))`` and delta-velocity
-    ``R_s(t_{k-1})^T (v_s(t_k) - v_s(t_{k-1}) - g dt)`` of the sensor over each interval."""
+def increments(source, t_s, gravity, extrinsic, ideal_at_stamps, a):
+    """Exact delta-angle ``Log(R_s(a_k)^T R_s(t_k))`` and delta-velocity
+    ``R_s(a_k)^T (v_s(t_k) - v_s(a_k) - g dt)`` of the sensor over each interval ``[a_k, t_k]``."""
     from .lie import quat_xyzw_to_matrix, so3_log
 
-    a = _interval_starts(source, t_s, prev_s)
     prev = ideal_imu(source, a, gravity=gravity, extrinsic=extrinsic)
     R0 = quat_xyzw_to_matrix(prev.quat_xyzw)
     R1 = quat_xyzw_to_matrix(ideal_at_stamps.quat_xyzw)
@@ -103,6 +119,17 @@ def increments(source, t_s, gravity, extrinsic, ideal_at_stamps, prev_s=None):
     g = np.asarray(gravity, dtype=np.float64)
     dv_w = ideal_at_stamps.velocity_world - prev.velocity_world - g * (t_s - a)[:, None]
     return dtheta, np.einsum("nji,nj->ni", R0, dv_w), t_s - a
+
+
+#: Child keys of the run's seed for the timing's and the vibration's draws: apart from the
+#: sensor model's streams (children 0..7), so those stay the same with or without them.
+TIMING_SEED_KEY = (1001,)
+VIBRATION_SEED_KEY = (1002,)
+
+
+def child_seed(seed, key) -> np.random.SeedSequence:
+    """``SeedSequence(seed, spawn_key=key)``: the stream of one effect of a run (fresh entropy for None)."""
+    return np.random.SeedSequence(seed, spawn_key=tuple(key))
 
 
 #: Samples per piece when a record is synthesized and written piece by piece: the memory in
@@ -122,18 +149,30 @@ class SynthesisStream:
     Attributes
     ----------
     t_ns : (N,) int64
-        All stamps.
+        All stamps (as written).
+    true_ns : (N,) int64
+        The samples' true times (``t_ns`` itself without a timing model).
     imu_config : ImuConfig or None
-    seed, gravity, extrinsic, sampling, with_increments :
+    seed, gravity, extrinsic, sampling, with_increments, sample_times, vibration_model :
         As given to :func:`synthesize_stream`.
     """
 
     def __init__(self, source, t_ns, *, gravity, extrinsic, imu_config, seed, temperature_c, sampling,
-                 with_increments, chunk_samples):
+                 with_increments, chunk_samples, vibration=None):
+        from .imu.timing import SampleTimes
+
         if sampling not in ("point", "mean"):
             raise SplineImuError(f"sampling must be 'point' or 'mean', got {sampling!r}")
         self.source = source
-        self.t_ns = np.asarray(t_ns, dtype=np.int64)
+        self.sample_times = t_ns if isinstance(t_ns, SampleTimes) else None
+        if self.sample_times is None:
+            self.t_ns = self.true_ns = np.asarray(t_ns, dtype=np.int64)
+        else:
+            self.t_ns, self.true_ns = self.sample_times.stamp_ns, self.sample_times.true_ns
+        self.vibration_model = None if vibration is None or vibration.is_empty else vibration
+        self._vibration = None
+        if self.vibration_model is not None:
+            self._vibration = self.vibration_model.realize(child_seed(seed, VIBRATION_SEED_KEY))
         self.gravity = tuple(gravity)
         self.extrinsic = extrinsic
         self.seed = seed
@@ -156,7 +195,8 @@ class SynthesisStream:
     def pieces(self):
         """Yield the :class:`Synthesis` of each run of at most ``chunk_samples`` stamps, in order."""
         src = self.source
-        t_all = src.t_s_from_ns(self.t_ns)
+        t_all = src.t_s_from_ns(self.true_ns)
+        starts = None if self.sample_times is None else src.t_s_from_ns(self.sample_times.interval_start_ns)
         n = t_all.size
         stream = None
         if self._model is not None:
@@ -167,23 +207,39 @@ class SynthesisStream:
         for a in range(0, n, self.chunk_samples):
             b = min(a + self.chunk_samples, n)
             t_s = t_all[a:b]
+            # the interval before each sample: from the previous sample on the clock (taken or not)
+            start = None
+            if self.sampling == "mean" or self.with_increments:
+                start = (_interval_starts(src, t_s, prev) if starts is None
+                         else np.maximum(starts[a:b], src.t_min_s))
             ideal = ideal_imu(src, t_s, gravity=self.gravity, extrinsic=self.extrinsic)
             if self.sampling == "mean":
-                gyro0, acc0 = mean_ideal(src, t_s, self.gravity, self.extrinsic, prev)
+                gyro0, acc0 = mean_ideal(src, t_s, self.gravity, self.extrinsic, start)
             else:
                 gyro0, acc0 = ideal.gyro, ideal.specific_force
+            vib = None
+            if self._vibration is not None:  # a function of true time, before the sensor model
+                vib = self._vibration.evaluate(t_s, start if self.sampling == "mean" else None)
+                gyro_in, acc_in = gyro0 + vib[0], acc0 + vib[1]
+            else:
+                gyro_in, acc_in = gyro0, acc0
             if stream is None:
                 zeros = np.zeros_like(ideal.gyro)
-                syn = Synthesis(self.t_ns[a:b], gyro0.copy(), acc0.copy(), zeros, zeros.copy(), ideal,
+                syn = Synthesis(self.t_ns[a:b], gyro_in.copy(), acc_in.copy(), zeros, zeros.copy(), ideal,
                                 None, self.seed, [], self.gravity, self.extrinsic)
             else:
                 T = None if temp is None else (np.asarray(temp)[a:b] if temp_is_series else temp)
-                meas = stream.apply(t_s, gyro0, acc0, temperature_c=T)
+                meas = stream.apply(t_s, gyro_in, acc_in, temperature_c=T)
                 syn = Synthesis(self.t_ns[a:b], meas.gyro, meas.accel, meas.bias_gyro, meas.bias_accel, ideal,
                                 self.imu_config, self.seed, list(meas.applied), self.gravity, self.extrinsic)
             syn.sampling = self.sampling
+            if self.sample_times is not None:
+                syn.true_ns, syn.sample_times = self.true_ns[a:b], self.sample_times
+            if vib is not None:
+                syn.vibration_gyro_rad_s, syn.vibration_accel_m_s2 = vib
+                syn.vibration_model = self.vibration_model
             if self.with_increments:
-                dth, dv, dt = increments(src, t_s, self.gravity, self.extrinsic, ideal, prev)
+                dth, dv, dt = increments(src, t_s, self.gravity, self.extrinsic, ideal, start)
                 # sensor errors (bias, noise, scale, ...) integrated over the interval: (measured - true) dt
                 syn.delta_angle = dth + (syn.gyro_rad_s - gyro0) * dt[:, None]
                 syn.delta_velocity = dv + (syn.accel_m_s2 - acc0) * dt[:, None]
@@ -192,16 +248,17 @@ class SynthesisStream:
 
     def collect(self) -> Synthesis:
         """The whole record as one :class:`Synthesis` (one piece: memory grows with N)."""
-        whole = SynthesisStream(self.source, self.t_ns, gravity=self.gravity, extrinsic=self.extrinsic,
+        times = self.t_ns if self.sample_times is None else self.sample_times
+        whole = SynthesisStream(self.source, times, gravity=self.gravity, extrinsic=self.extrinsic,
                                 imu_config=self.imu_config, seed=self.seed, temperature_c=self.temperature_c,
                                 sampling=self.sampling, with_increments=self.with_increments,
-                                chunk_samples=max(1, self.t_ns.size))
+                                chunk_samples=max(1, self.t_ns.size), vibration=self.vibration_model)
         return next(whole.pieces())
 
 
 def synthesize_stream(source: MotionSource, t_ns, *, gravity=DEFAULT_GRAVITY, extrinsic: Extrinsic | None = None,
                       imu_config=None, seed=None, temperature_c=None, sampling="point",
-                      with_increments=False, chunk_samples: int = CHUNK_SAMPLES) -> SynthesisStream:
+                      with_increments=False, chunk_samples: int = CHUNK_SAMPLES, vibration=None) -> SynthesisStream:
     """:func:`synthesize`, made piece by piece when iterated (bounded memory for long records).
 
     Parameters are those of :func:`synthesize`, plus ``chunk_samples`` (stamps per piece).
@@ -210,26 +267,30 @@ def synthesize_stream(source: MotionSource, t_ns, *, gravity=DEFAULT_GRAVITY, ex
     """
     return SynthesisStream(source, t_ns, gravity=gravity, extrinsic=extrinsic, imu_config=imu_config, seed=seed,
                            temperature_c=temperature_c, sampling=sampling, with_increments=with_increments,
-                           chunk_samples=chunk_samples)
+                           chunk_samples=chunk_samples, vibration=vibration)
 
 
 def synthesize(source: MotionSource, t_ns, *, gravity=DEFAULT_GRAVITY, extrinsic: Extrinsic | None = None,
                imu_config=None, seed=None, temperature_c=None, sampling="point",
-               with_increments=False) -> Synthesis:
+               with_increments=False, vibration=None) -> Synthesis:
     """IMU samples of ``source`` at integer-nanosecond stamps ``t_ns``.
 
     Parameters
     ----------
     source : MotionSource
-    t_ns : (N,) int64
-        Sample stamps (absolute; the source's ``origin_ns`` is subtracted exactly).
+    t_ns : (N,) int64 or SampleTimes
+        Sample stamps (absolute; the source's ``origin_ns`` is subtracted exactly), or the
+        :class:`~splineimu.imu.timing.SampleTimes` of an IMU with a timing model: then each
+        sample is taken at its true time (``true_ns``; for ``"mean"`` over the interval from
+        the previous sample on the IMU's clock, dropped or not) and stamped ``stamp_ns``.
     gravity : (3,) world gravity [m/s^2]
     extrinsic : Extrinsic, optional
         ``body_T_sensor``.
     imu_config : ImuConfig, path, preset name or None
         Sensor model; None gives noise-free data.
     seed : int, optional
-        Seed of the sensor model's random streams.
+        Seed of the sensor model's random streams (and, from the child
+        :data:`VIBRATION_SEED_KEY`, of the vibration's phases).
     temperature_c : float or (N,) array, optional
         Sensor temperature (overrides the configuration's profile).
     sampling : {"point", "mean"}
@@ -239,6 +300,10 @@ def synthesize(source: MotionSource, t_ns, *, gravity=DEFAULT_GRAVITY, extrinsic
     with_increments : bool
         Also compute delta-angle and delta-velocity per interval (exact, coning and sculling
         included), plus the sensor errors integrated over the interval.
+    vibration : VibrationModel, optional
+        Vibration added to the ideal signals before the sensor model, as a function of true
+        time (interval means for ``"mean"``); kept in ``vibration_gyro_rad_s`` /
+        ``vibration_accel_m_s2``.
 
     See Also
     --------
@@ -246,7 +311,7 @@ def synthesize(source: MotionSource, t_ns, *, gravity=DEFAULT_GRAVITY, extrinsic
     """
     return synthesize_stream(source, t_ns, gravity=gravity, extrinsic=extrinsic, imu_config=imu_config, seed=seed,
                              temperature_c=temperature_c, sampling=sampling,
-                             with_increments=with_increments).collect()
+                             with_increments=with_increments, vibration=vibration).collect()
 
 
 def _versions():
@@ -264,6 +329,12 @@ def write_output(syn, out_dir, *, force=False, report: dict | None = None, bag: 
     ``imu0/data.csv``, ``state_groundtruth_estimate0/data.csv`` (sensor pose, velocity and true
     biases), ``groundtruth.tum`` (body poses at the IMU stamps), ``imu.yaml`` (the sensor
     model used), ``report.json``; optionally a ROS bag and PNG plots.
+
+    With a timing model the IMU rows carry the IMU's stamps and the ground-truth rows (one per
+    written sample, in the same order) the samples' true times; ``report.json`` gets a
+    ``timing`` section (model, counts, dropped runs). With vibration, ``imu0/vibration.csv``
+    holds it with the same columns and stamps as ``imu0/data.csv``, and ``report.json`` a
+    ``vibration`` section.
 
     ``syn`` is a :class:`Synthesis` or a :class:`SynthesisStream`; a stream is synthesized
     and written piece by piece, in bounded memory (bags and plots need the whole record and
@@ -297,6 +368,8 @@ def write_output(syn, out_dir, *, force=False, report: dict | None = None, bag: 
     }
     with_increments = (syn.with_increments if isinstance(syn, SynthesisStream)
                        else syn.delta_angle is not None)
+    _effects_report(syn, out_report)
+    with_vibration = syn.vibration_model is not None
     with OutputFolder(out_dir, force=force) as tmp:
         (tmp / "imu0").mkdir()
         (tmp / "state_groundtruth_estimate0").mkdir()
@@ -309,17 +382,19 @@ def write_output(syn, out_dir, *, force=False, report: dict | None = None, bag: 
                                      "dtheta_z [rad],dv_x [m s^-1],dv_y [m s^-1],dv_z [m s^-1]"))
             out_report["imu"]["increments"] = "imu0/increments.csv (exact delta-angle / delta-velocity " \
                 "over [previous stamp, stamp], sensor frame at the interval start)"
+        if with_vibration:
+            files.append(TableWriter(tmp / "imu0" / "vibration.csv", EUROC_IMU_HEADER))
         bar = _progress_bar(n_total, progress)
         last_q = None
         applied = []
         try:
             for piece in pieces:
-                t = piece.t_ns
+                t, t_true = piece.t_ns, piece.t_true_ns
                 ideal = piece.ideal
                 # (+ 0.0 turns -0.0 into 0.0 in the text)
                 files[0].write(t, np.hstack([piece.gyro_rad_s, piece.accel_m_s2]) + 0.0)
                 q = ideal.quat_xyzw
-                files[1].write(t, np.hstack([ideal.position_world, q[:, [3, 0, 1, 2]], ideal.velocity_world,
+                files[1].write(t_true, np.hstack([ideal.position_world, q[:, [3, 0, 1, 2]], ideal.velocity_world,
                                              piece.bias_gyro_rad_s, piece.bias_accel_m_s2]))
                 body = ideal.body
                 # with the sensor at the body origin, ideal_imu already converted this rotation
@@ -330,9 +405,11 @@ def write_output(syn, out_dir, *, force=False, report: dict | None = None, bag: 
                 else:
                     qb = quat_make_continuous(qb)
                 last_q = qb[-1:]
-                files[2].write(t, np.hstack([body.position_world, qb]))
+                files[2].write(t_true, np.hstack([body.position_world, qb]))
                 if with_increments:
                     files[3].write(t, np.hstack([piece.delta_angle, piece.delta_velocity]) + 0.0)
+                if with_vibration:
+                    files[-1].write(t, np.hstack([piece.vibration_gyro_rad_s, piece.vibration_accel_m_s2]) + 0.0)
                 applied = piece.applied
                 if bar is not None:
                     bar.update(t.size)
@@ -351,7 +428,7 @@ def write_output(syn, out_dir, *, force=False, report: dict | None = None, bag: 
             from .io.bag import write_bag
 
             name = "imu.bag" if bag == "ros1" else "bag_ros2"
-            write_bag(tmp / name, bag, syn.t_ns, syn.gyro_rad_s, syn.accel_m_s2, syn.t_ns,
+            write_bag(tmp / name, bag, syn.t_ns, syn.gyro_rad_s, syn.accel_m_s2, syn.t_true_ns,
                       syn.ideal.position_world, syn.ideal.quat_xyzw)
             out_report["bag"] = name
         if plot:
@@ -365,6 +442,19 @@ def write_output(syn, out_dir, *, force=False, report: dict | None = None, bag: 
             out_report["plots"] = plots
         (tmp / "report.json").write_text(json.dumps(out_report, indent=2, default=_json_default) + "\n")
     return out_report
+
+
+def _effects_report(syn, out_report):
+    """The ``timing`` and ``vibration`` sections of report.json (only when they are modelled)."""
+    if syn.sample_times is not None:
+        out_report["timing"] = {
+            **syn.sample_times.report(), "seed_key": list(TIMING_SEED_KEY),
+            "stamps": "imu0/data.csv: the IMU clock's reading (true time + offset + drift) plus stamp noise",
+            "ground_truth": "one row per written sample, in the same order, at its true time"}
+    if syn.vibration_model is not None:
+        out_report["vibration"] = {
+            "model": syn.vibration_model.to_dict(), "seed_key": list(VIBRATION_SEED_KEY),
+            "file": "imu0/vibration.csv (added before the sensor model; not part of the ground truth)"}
 
 
 #: records at least this long get a progress bar (when stderr is a terminal)

@@ -48,6 +48,21 @@ def test_negative_drift_covers_the_span():
     assert st.index[-1] == 999  # the slow clock reaches 9.998 s of its own time at true 10 s
 
 
+def test_dropped_runs_cover_every_loss_and_effects_draw_apart():
+    tm = TimingModel(drop_probability=0.4)
+    st = tm.sample_times(0, 2_000_000_000, 100.0, rng=3)
+    runs = st.dropped_ranges(max_ranges=10**6)
+    assert sum(r["count"] for r in runs) == st.n_dropped == st.n_taken - st.index.size
+    assert len(runs) == st.n_dropped_runs() == st.report()["dropped_runs_total"]
+    ends = [r for r in runs if r["first_index"] == 0 or r["first_index"] + r["count"] == st.n_taken]
+    assert len(ends) == 2  # this seed loses samples at both ends of the record
+    for r in ends:
+        assert r["t_start_ns"] == 0 if r["first_index"] == 0 else r["t_end_ns"] == 2_000_000_000
+    # stamp noise does not move the losses (each effect has its own stream)
+    noisy = TimingModel(drop_probability=0.4, stamp_noise_s=1e-4).sample_times(0, 2_000_000_000, 100.0, rng=3)
+    assert np.array_equal(noisy.index, st.index) and not np.array_equal(noisy.stamp_ns, st.stamp_ns)
+
+
 def test_burst_losses_have_the_asked_fraction_and_length():
     tm = TimingModel(drop_probability=0.05, drop_burst_s=0.1)
     st = tm.sample_times(0, 600_000_000_000, 200.0, rng=3)

@@ -51,6 +51,10 @@ FLAGS = {
     "gaps": "--gaps",
     "name": "SCENE", "duration_s": "--duration", "t0_ns": "--t0-ns", "params": "--param",
     "dir": "--out", "force": "--force", "bag": "--bag", "plot": "--plot", "tum": "--tum",
+    "vibration": "--vibration", "timing": "--time-offset/--clock-drift-ppm/--stamp-noise/--drop-probability",
+    "timing.time_offset_s": "--time-offset", "timing.clock_drift_ppm": "--clock-drift-ppm",
+    "timing.stamp_noise_s": "--stamp-noise", "timing.drop_probability": "--drop-probability",
+    "timing.drop_burst_s": "--drop-burst",
 }
 
 DEFAULT_GRAVITY = (0.0, 0.0, -9.81)
@@ -189,13 +193,26 @@ class ImuOptions(_Checked):
     increments : bool
         Also write delta-angle / delta-velocity per interval.
     seed : int, optional
-        Seed of the sensor model's random streams (a fresh one is drawn and reported if a
-        model is given without seed).
+        Seed of the run's random streams: the sensor model's, and (from their own child
+        streams, so the sensor noise is the same with or without them) the timing's and the
+        vibration's. A fresh one is drawn and reported when something random is modelled
+        without a seed.
+    timing : TimingModel or mapping, optional
+        Clock offset and drift, stamp noise and dropped samples
+        (:class:`~splineimu.imu.timing.TimingModel`; keys ``time_offset_s``,
+        ``clock_drift_ppm``, ``stamp_noise_s``, ``drop_probability``, ``drop_burst_s``).
+        Not with ``timestamps``. Without it (or with every key zero) the samples lie on the
+        plain grid.
+    vibration : VibrationModel, mapping, str, optional
+        Sinusoidal and random vibration added before the sensor model
+        (:class:`~splineimu.imu.vibration.VibrationModel`): a mapping with ``accel`` / ``gyro``
+        lists, a YAML file holding one, or that mapping as YAML text.
 
     Raises
     ------
     ConfigError
-        A value out of range, an unknown preset, a bad IMU model or extrinsic.
+        A value out of range, an unknown preset, a bad IMU model, extrinsic, timing or
+        vibration.
     """
 
     rate_hz: float = 200.0
@@ -206,6 +223,8 @@ class ImuOptions(_Checked):
     sampling: str = "point"
     increments: bool = False
     seed: int | None = None
+    timing: object = None
+    vibration: object = None
     origin: Origin | None = _origin_field()
 
     def __post_init__(self):
@@ -225,6 +244,12 @@ class ImuOptions(_Checked):
         self.extrinsic = self._mapping_or_spec("extrinsic")
         self._config = self._load_model()
         self._body_T_sensor = self._load_extrinsic()
+        from .effects import load_timing, load_vibration
+
+        self.timing = load_timing(self._mapping_or_spec("timing"), self._o())
+        self.vibration = load_vibration(self._mapping_or_spec("vibration"), self._o())
+        if self.timing is not None and self.timestamps is not None:
+            raise self._err("timing", "applies to the IMU's own clock grid (`rate_hz`), not to given `timestamps`")
 
     def _load_model(self):
         if self.model is None:
@@ -487,6 +512,10 @@ class SynthesisJob:
                 argv += ["--param", f"{k}={','.join(map(_num, v)) if isinstance(v, list) else _num(v)}"]
         argv += _flags(self.imu, ("rate_hz", "timestamps", "model", "extrinsic", "gravity", "sampling",
                                   "increments", "seed"))
+        if self.imu.timing is not None:
+            argv += [x for k, v in self.imu.timing.to_dict().items() for x in (FLAGS[f"timing.{k}"], _num(v))]
+        if self.imu.vibration is not None:
+            argv += [FLAGS["vibration"], json.dumps(self.imu.vibration.to_dict())]
         if self.output.dir is not None:
             argv += ["-o", self.output.dir]
         argv += _flags(self.output, ("force", "bag", "plot", "tum"))

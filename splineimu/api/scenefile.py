@@ -21,6 +21,9 @@
       gravity: [0, 0, -9.81]
       sampling: point             # point | mean
       increments: false
+      timing: {time_offset_s: 0.0123, clock_drift_ppm: 50, stamp_noise_s: 1.0e-4, drop_probability: 0.01}
+      vibration:                  # or a YAML file holding this block
+        accel: [{freq_hz: 37, amplitude: [0.5, 0, 0]}, {band_hz: [20, 80], psd: [1.0e-4, 1.0e-4, 0]}]
     seed: 42
     output:
       dir: out                    # relative paths are relative to the scene file
@@ -63,7 +66,8 @@ KEYS = {
     ("motion",): ("scene", "duration_s", "t0_ns", "params", "poses", "format", "spline", "gaps", "max_gap_s",
                   "repeated_stamps"),
     ("motion", "spline"): ("kind", "order", "knot_spacing_s", "smoothness", "keep_outliers"),
-    ("imu",): ("rate_hz", "timestamps", "model", "extrinsic", "gravity", "sampling", "increments"),
+    ("imu",): ("rate_hz", "timestamps", "model", "extrinsic", "gravity", "sampling", "increments", "timing",
+               "vibration"),
     ("output",): ("dir", "bag", "plot", "force", "tum"),
 }
 
@@ -142,7 +146,7 @@ def job_from_document(doc, base) -> SynthesisJob:
             q = Path(v).expanduser()
             section[key] = str(q if q.is_absolute() else base / q)
 
-    for key in ("timestamps", "extrinsic"):
+    for key in ("timestamps", "extrinsic", "vibration"):
         rel(imu, key)
     model = imu.get("model")
     if isinstance(model, str) and ((base / model).exists() or model.endswith((".yaml", ".yml"))):
@@ -167,7 +171,7 @@ def job_from_document(doc, base) -> SynthesisJob:
     if "seed" in top:
         imu["seed"] = top["seed"]
     imu_opts = _build(ImuOptions, doc, imu, ("imu",), ("rate_hz", "timestamps", "model", "extrinsic", "gravity",
-                                                      "sampling", "increments", "seed"),
+                                                      "sampling", "increments", "seed", "timing", "vibration"),
                       extra={"seed": ("seed",)})
     output = _build(OutputOptions, doc, out, ("output",), ("dir", "force", "bag", "plot", "tum"))
     try:

@@ -220,13 +220,28 @@ def _check_output(job, write):
 
 
 def _seed(job):
-    """A given seed, or (with a sensor model) a fresh one that is reported so that the run can be repeated."""
-    if job.imu.seed is not None or job.imu.imu_config is None:
-        return job.imu.seed
+    """A given seed, or (with something random: a sensor model, stamp noise, losses, vibration) a
+    fresh one that is reported so that the run can be repeated."""
+    imu = job.imu
+    timing = imu.timing
+    random_timing = timing is not None and (timing.stamp_noise_s > 0 or timing.drop_probability > 0)
+    if imu.seed is not None or not (imu.imu_config is not None or random_timing or imu.vibration is not None):
+        return imu.seed
     return int(np.random.SeedSequence().entropy % (2**63))
 
 
-def _stamps(job, first_ns: int, last_ns: int, log):
+def _stamps(job, first_ns: int, last_ns: int, log, seed=None):
+    """The stamps: a grid at ``rate_hz``, the given ``timestamps``, or (with a timing model) the
+    :class:`~splineimu.imu.timing.SampleTimes` of the IMU's clock."""
+    if job.imu.timing is not None:
+        from ..pipeline import TIMING_SEED_KEY, child_seed
+
+        st = job.imu.timing.sample_times(first_ns, last_ns, job.imu.rate_hz, rng=child_seed(seed, TIMING_SEED_KEY))
+        if st.index.size == 0:
+            raise ConfigError("every sample was dropped: lower `drop_probability`", option="timing.drop_probability")
+        log.line(f"timing        {st.n_dropped} of {st.n_taken} samples dropped; stamps on the IMU clock "
+                 f"({', '.join(f'{k} {v:g}' for k, v in st.model.items())})")
+        return st
     if job.imu.timestamps is None:
         from ..timegrid import uniform_stamps_ns
 
@@ -250,7 +265,7 @@ def _synthesize(job, source, t_ns, seed, out_dir, report, write, result, force=N
     imu = job.imu
     syn = synthesize_stream(source, t_ns, gravity=imu.gravity, extrinsic=imu.body_T_sensor,
                             imu_config=imu.imu_config, seed=seed, sampling=imu.sampling,
-                            with_increments=imu.increments)
+                            with_increments=imu.increments, vibration=imu.vibration)
     if write:
         result.report = write_output(syn, out_dir, force=job.output.force if force is None else force, report=report,
                                      bag=job.output.bag, plot=job.output.plot, fit_data=fit_data)
@@ -279,11 +294,11 @@ def synthesize_scene(job: SynthesisJob, *, echo=None, write: bool = True, prepar
         log.line(f"poses         {job.output.tum} ({job.imu.rate_hz:g} Hz)")
     if write and job.output.dir is None:
         return result
-    t_ns = _stamps(job, scene.origin_ns, scene.origin_ns + int(round(scene.t_max_s * 1e9)), log)
     seed = _seed(job)
+    t_ns = _stamps(job, scene.origin_ns, scene.origin_ns + int(round(scene.t_max_s * 1e9)), log, seed)
     _synthesize(job, scene, t_ns, seed, job.output.dir, scene_report(scene, job), write, result)
     log.line(f"scene         {m.name}, {scene.t_max_s:g} s")
-    log.line(imu_line(t_ns, job, seed))
+    log.line(imu_line(getattr(t_ns, "stamp_ns", t_ns), job, seed))
     if write:
         log.line(f"written       {job.output.dir}  ({time.perf_counter() - t_wall:.2f} s)")
     return result
@@ -399,8 +414,8 @@ def _one(job, piece, out_dir, gaps, max_gap, write, result, log):
     log = log or _Log(result, None)
     track, spl, rep = piece
     result.source, result.fit_report = spl, rep
-    t_ns = _stamps(job, int(track.t_ns[0]), int(track.t_ns[-1]), log)
     seed = _seed(job)
+    t_ns = _stamps(job, int(track.t_ns[0]), int(track.t_ns[-1]), log, seed)
     t_s = (track.t_ns - int(track.t_ns[0])).astype(np.float64) / 1e9
     fit_data = _fit_residuals(spl, t_s, track) if (write and job.output.plot) else None
     report = poses_report(job, track, rep, gaps, max_gap)
@@ -409,7 +424,7 @@ def _one(job, piece, out_dir, gaps, max_gap, write, result, log):
     if not quiet:
         for text in fit_lines(rep, gaps, max_gap):
             log.line(text)
-        log.line(imu_line(t_ns, job, seed, detailed=True))
+        log.line(imu_line(getattr(t_ns, "stamp_ns", t_ns), job, seed, detailed=True))
     return result
 
 

@@ -80,8 +80,12 @@ def _expander(base: Path):
 
             e = Extrinsic() if value is None else Extrinsic.from_file(str(_resolve(base, value)))
             return {"translation": e.body_t_sensor.tolist(), "quat_xyzw": matrix_to_quat_xyzw(e.body_R_sensor).tolist()}
-        if value is None and (path == "motion.params" or tuple(path.split(".")) in KEYS):
+        if value is None and (path in ("motion.params", "imu.timing") or tuple(path.split(".")) in KEYS):
             return {}  # an absent optional block of the format
+        if value is None and path == "imu.gravity":
+            from .options import DEFAULT_GRAVITY
+
+            return list(DEFAULT_GRAVITY)
         return None
 
     return expand

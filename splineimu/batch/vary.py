@@ -150,7 +150,8 @@ def set_dotted(data: dict, key: str, value, expand=None) -> None:
     A part that is a number indexes a list (``imu.extrinsic.translation.0``). Intermediate
     mappings must exist, except where ``expand(path_so_far, current_value)`` turns a scalar
     into a mapping (e.g. an IMU preset name into its keys) or returns ``{}`` for an absent
-    optional block; it returns ``None`` where the path is not part of the scene format.
+    optional block (or the default list of an absent vector); it returns ``None`` where the
+    path is not part of the scene format.
 
     Raises
     ------
@@ -170,7 +171,7 @@ def set_dotted(data: dict, key: str, value, expand=None) -> None:
         nxt = _child(node, part)
         if not isinstance(nxt, (dict, list)):
             nxt = expand(".".join(parts[: i + 1]), nxt) if expand is not None and isinstance(node, dict) else None
-            if not isinstance(nxt, dict):
+            if not isinstance(nxt, (dict, list)):
                 raise KeyError(".".join(parts[: i + 1]))
             node[part] = nxt
         node = nxt

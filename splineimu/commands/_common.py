@@ -44,6 +44,17 @@ def add_imu_args(p: argparse.ArgumentParser):
                    help="also write imu0/increments.csv: delta-angle and delta-velocity per interval")
     g.add_argument("--gravity", type=float, nargs=3, metavar=("GX", "GY", "GZ"),
                    help="world gravity vector [m/s^2] (default 0 0 -9.81)")
+    g = p.add_argument_group("sensor timing and vibration (off by default; ground truth stays on true time)")
+    g.add_argument("--time-offset", type=float, metavar="S", help="the IMU clock reads true time + S")
+    g.add_argument("--clock-drift-ppm", type=float, metavar="PPM",
+                   help="the IMU clock runs fast by PPM parts per million (negative: slow)")
+    g.add_argument("--stamp-noise", type=float, metavar="S", help="white noise (std, s) on the written stamps")
+    g.add_argument("--drop-probability", type=float, metavar="P", help="each sample is lost with probability P")
+    g.add_argument("--drop-burst", type=float, metavar="S", help="losses come in bursts of mean length S")
+    g.add_argument("--vibration", metavar="FILE.yaml",
+                   help="vibration added before the sensor model: a YAML file or inline mapping "
+                        "'{accel: [{freq_hz: 37, amplitude: [0.5, 0, 0]}]}' (also band_hz + psd); "
+                        "its contribution is written to imu0/vibration.csv")
 
 
 def add_pose_args(p: argparse.ArgumentParser, fmt_help: str):
@@ -110,8 +121,11 @@ def options_from_args(args, motion: str):
         if args.out is None:
             args.out = Path(args.poses).stem + "_imu"
     imu = ImuOptions(**_given(args, rate_hz="rate", timestamps="timestamps", model="imu", extrinsic="extrinsic",
-                              gravity="gravity", sampling="sampling", increments="increments", seed="seed"),
-                     origin=o)
+                              gravity="gravity", sampling="sampling", increments="increments", seed="seed",
+                              vibration="vibration"),
+                     timing=_given(args, time_offset_s="time_offset", clock_drift_ppm="clock_drift_ppm",
+                                   stamp_noise_s="stamp_noise", drop_probability="drop_probability",
+                                   drop_burst_s="drop_burst") or None, origin=o)
     output = OutputOptions(**_given(args, dir="out", force="force", bag="bag", plot="plot", tum="tum"), origin=o)
     return SynthesisJob(source, imu, output)
 

@@ -121,8 +121,9 @@ class TimingModel:
             True-time span of the motion (integer ns); the first sample is taken at ``first_ns``.
         rate_hz : float
             Nominal rate of the IMU clock.
-        rng : numpy Generator, int or None
-            Source of stamp noise and losses (only drawn from when those are set).
+        rng : numpy Generator, SeedSequence, int or None
+            Source of stamp noise and losses (each from its own child stream, drawn from only
+            when that effect is set).
 
         Returns
         -------
@@ -146,14 +147,14 @@ class TimingModel:
         prev_true_ns = np.concatenate([true_ns[:1], true_ns[:-1]])
         offset_ns = int(round(self.time_offset_s * 1e9))
         stamp_ns = np.int64(first_ns + offset_ns) + grid
-        gen = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
+        noise_gen, loss_gen = _child_generators(rng, 2)
         if self.stamp_noise_s > 0:
-            stamp_ns = stamp_ns + np.rint(gen.normal(0.0, self.stamp_noise_s * 1e9, grid.size)).astype(np.int64)
+            stamp_ns = stamp_ns + np.rint(noise_gen.normal(0.0, self.stamp_noise_s * 1e9, grid.size)).astype(np.int64)
         keep = np.ones(grid.size, dtype=bool)
         if self.drop_probability > 0:
-            keep = ~_losses(grid.size, self.drop_probability, self.drop_burst_s * float(rate_hz), gen)
+            keep = ~_losses(grid.size, self.drop_probability, self.drop_burst_s * float(rate_hz), loss_gen)
         return SampleTimes(index[keep], true_ns[keep], stamp_ns[keep], prev_true_ns[keep], int(grid.size),
-                           self.to_dict())
+                           self.to_dict(), int(true_ns[0]), int(true_ns[-1]))
 
 
 def _error(doc, keys, message):
@@ -162,6 +163,21 @@ def _error(doc, keys, message):
     if doc is None:
         return ConfigError(message, option=".".join(map(str, keys)) or None)
     return doc.error(message, *keys)
+
+
+def _child_generators(rng, n: int) -> list:
+    """``n`` independent generators from ``rng`` (Generator, SeedSequence, int or None).
+
+    Child ``i`` of a seed is ``SeedSequence(entropy, spawn_key=spawn_key + (i,))`` (as in
+    :mod:`splineimu.imu.noise`): the stamp noise and the losses have their own streams, so
+    switching one effect on or off leaves the other's realization unchanged.
+    """
+    if isinstance(rng, np.random.Generator):
+        return rng.spawn(n)
+    ss = rng if isinstance(rng, np.random.SeedSequence) else np.random.SeedSequence(rng)
+    return [np.random.Generator(np.random.PCG64(np.random.SeedSequence(ss.entropy, spawn_key=tuple(ss.spawn_key) + (i,),
+                                                                       pool_size=ss.pool_size)))
+            for i in range(n)]
 
 
 def _losses(n: int, p: float, burst_samples: float, gen) -> np.ndarray:
@@ -198,6 +214,8 @@ class SampleTimes:
         Samples on the clock grid before losses.
     model : dict
         The timing keys that were set.
+    first_true_ns, last_true_ns : int or None
+        True times of the first and the last sample on the clock grid (taken or not).
     """
 
     index: np.ndarray
@@ -206,6 +224,8 @@ class SampleTimes:
     interval_start_ns: np.ndarray
     n_taken: int
     model: dict = field(default_factory=dict)
+    first_true_ns: int | None = None
+    last_true_ns: int | None = None
 
     @property
     def n_dropped(self) -> int:
@@ -214,23 +234,37 @@ class SampleTimes:
     def dropped_ranges(self, max_ranges: int = 1000) -> list:
         """Runs of dropped indices as ``{"first_index", "count", "t_start_ns", "t_end_ns"}``.
 
-        The times are the true times of the kept samples around each run (the span with no data).
+        The times are the true times of the kept samples around each run (the span with no
+        data); a run at the start begins at the first sample's true time, a run at the end
+        ends at the last sample's (both on the clock grid).
         """
-        out = []
-        if self.index.size < 2:
-            return out
-        gap = np.flatnonzero(np.diff(self.index) > 1)
-        for i in gap[:max_ranges]:
-            out.append({"first_index": int(self.index[i] + 1), "count": int(self.index[i + 1] - self.index[i] - 1),
-                        "t_start_ns": int(self.true_ns[i]), "t_end_ns": int(self.true_ns[i + 1])})
-        return out
+        first = self.first_true_ns if self.first_true_ns is not None else (
+            int(self.true_ns[0]) if self.true_ns.size else 0)
+        last = self.last_true_ns if self.last_true_ns is not None else (
+            int(self.true_ns[-1]) if self.true_ns.size else first)
+        if self.index.size == 0:
+            everything = {"first_index": 0, "count": int(self.n_taken), "t_start_ns": first, "t_end_ns": last}
+            return [everything][:max_ranges] if self.n_taken else []
+        # kept indices with the grid's ends as sentinels (-1 before, n_taken after)
+        idx = np.concatenate([[-1], self.index, [self.n_taken]])
+        t = np.concatenate([[first], self.true_ns, [last]])
+        gap = np.flatnonzero(np.diff(idx) > 1)
+        return [{"first_index": int(idx[i] + 1), "count": int(idx[i + 1] - idx[i] - 1),
+                 "t_start_ns": int(t[i]), "t_end_ns": int(t[i + 1])} for i in gap[:max_ranges]]
+
+    def n_dropped_runs(self) -> int:
+        """Number of runs of consecutive dropped samples (at the ends included)."""
+        idx = np.concatenate([[-1], self.index, [self.n_taken]])
+        return int(np.count_nonzero(np.diff(idx) > 1))
 
     def report(self) -> dict:
-        """What report.json says of the timing: model, counts, dropped runs, stamp order."""
+        """What report.json says of the timing: model, counts, dropped runs (the first 1000 of
+        ``dropped_runs_total``), and how many stamps do not increase (stamp noise can reorder)."""
         back = int(np.count_nonzero(np.diff(self.stamp_ns) <= 0)) if self.stamp_ns.size > 1 else 0
         return {"model": dict(self.model), "samples_on_clock": int(self.n_taken),
                 "samples_written": int(self.index.size), "dropped": self.n_dropped,
-                "dropped_runs": self.dropped_ranges(), "stamps_not_increasing": back}
+                "dropped_runs_total": self.n_dropped_runs(), "dropped_runs": self.dropped_ranges(),
+                "stamps_not_increasing": back}
 
 
 __all__ = ["TimingModel", "SampleTimes", "TIMING_KEYS"]

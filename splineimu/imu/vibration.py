@@ -41,6 +41,7 @@ import numpy as np
 
 from .._jit import jit
 from ..validation import as_vector, nonnegative_float, positive_float
+from .timing import _child_generators, _error
 
 #: Cosines per random band.
 N_TONES = 256
@@ -100,10 +101,14 @@ class VibrationModel:
         return not (self.gyro or self.accel)
 
     def realize(self, rng=None) -> VibrationRealization:
-        """Draw phases (and random-band frequencies) from ``rng``: one realization for a run."""
-        gen = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
+        """Draw phases (and random-band frequencies) from ``rng``: one realization for a run.
+
+        ``rng`` is a Generator, SeedSequence, int or None; the gyro and the accelerometer draw
+        from their own child streams (adding a gyro component leaves the accel's phases as
+        they were).
+        """
         tables = []
-        for s in SENSORS:
+        for s, gen in zip(SENSORS, _child_generators(rng, len(SENSORS))):
             freq, amp, phase = [], [], []
             for c in getattr(self, s):
                 if isinstance(c, Sinusoid):
@@ -122,14 +127,6 @@ class VibrationModel:
             else:
                 tables.append(None)
         return VibrationRealization(*tables)
-
-
-def _error(doc, keys, message):
-    from ..errors import ConfigError
-
-    if doc is None:
-        return ConfigError(message, option=".".join(map(str, keys)) or None)
-    return doc.error(message, *keys)
 
 
 def _component(item, doc, keys, label):
@@ -163,18 +160,22 @@ def _component(item, doc, keys, label):
 
 @jit(nogil=True)
 def _cos_sum(t, a, freq, amp, phase, out):
-    """out[n, j] = sum_i amp[i, j] * mean of cos(2 pi freq[i, j] s + phase[i, j]) over s in [a_n, t_n]."""
+    """out[n, j] = sum_i amp[i, j] * mean of cos(2 pi freq[i, j] s + phase[i, j]) over s in [a_n, t_n].
+
+    The mean is ``cos(w m + phi) sin(w h) / (w h)`` with midpoint ``m`` and half-width ``h``
+    (no cancellation for short intervals; the point value at ``h = 0``).
+    """
     two_pi = 2.0 * np.pi
     for n in range(t.size):
-        tn, an = t[n], a[n]
+        m = 0.5 * (t[n] + a[n])
+        h = 0.5 * (t[n] - a[n])
         for j in range(3):
             acc = 0.0
             for i in range(freq.shape[0]):
                 w = two_pi * freq[i, j]
-                if tn > an:
-                    acc += amp[i, j] * (np.sin(w * tn + phase[i, j]) - np.sin(w * an + phase[i, j])) / (w * (tn - an))
-                else:
-                    acc += amp[i, j] * np.cos(w * tn + phase[i, j])
+                x = w * h
+                sinc = 1.0 - x * x / 6.0 if abs(x) < 1e-4 else np.sin(x) / x
+                acc += amp[i, j] * np.cos(w * m + phase[i, j]) * sinc
             out[n, j] = acc
 
 
