@@ -42,7 +42,8 @@ b0 = time.process_time()
 RotationSpline(t, Rotation.from_quat(q)); make_interp_spline(t, p, k=3)
 b1 = time.process_time()
 print(json.dumps(dict(n=n, wall=w1 - w0, cpu=c1 - c0, rss_mb=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
-                      base_cpu=b1 - b0, order=rep.order, dt=rep.knot_spacing_s, iters=rep.iterations)))
+                      base_cpu=b1 - b0, order=rep.order, dt=rep.knot_spacing_s, pos_order=rep.position_order,
+                      pos_dt=rep.position_knot_spacing_s, iters=rep.iterations)))
 """
 
 
@@ -52,11 +53,12 @@ def main(sizes=(1000, 10_000, 36_000, 144_000, 720_000)):
         out = subprocess.run([sys.executable, "-c", CHILD, str(n)], capture_output=True, text=True,
                              env=dict(os.environ, PYTHONPATH=str(HERE.parent)), check=True)
         rows.append(json.loads(out.stdout.strip().splitlines()[-1]))
-    print("| poses | fit wall [s] | fit CPU [s] | peak RSS [MB] | scipy interp CPU [s] | order | knot spacing [ms] |")
+    print("| poses | fit wall [s] | fit CPU [s] | peak RSS [MB] | scipy interp CPU [s] | rotation order, spacing [ms] "
+          "| position order, spacing [ms] |")
     print("| ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
     for r in rows:
         print(f"| {r['n']} | {r['wall']:.2f} | {r['cpu']:.2f} | {r['rss_mb']:.0f} | {r['base_cpu']:.2f} | "
-              f"{r['order']} | {r['dt'] * 1e3:.1f} |")
+              f"{r['order']}, {r['dt'] * 1e3:.1f} | {r['pos_order']}, {r['pos_dt'] * 1e3:.1f} |")
     return rows
 
 

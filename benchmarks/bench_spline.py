@@ -60,8 +60,7 @@ def scipy_baseline(spl):
 
     def run(t):
         rot = rs(t)
-        w_world = rs(t, 1)  # RotationSpline's first derivative is the world-frame rate
-        gyro = rot.inv().apply(w_world)
+        gyro = rs(t, 1)  # RotationSpline's first derivative is the body-frame rate
         acc = cs(t, 2)
         return gyro, rot.inv().apply(acc - g)
 

@@ -7,6 +7,7 @@ import pytest
 
 from splineimu import Spline, SplineImuError, fit, lie
 from splineimu._kernels import fit as _kf
+from splineimu.errors import InputError
 from splineimu.scenes import make_scene
 from splineimu.spline.basis import blending_matrix
 from splineimu.spline.fit import _increments_se3, _increments_so3
@@ -109,26 +110,28 @@ def test_clean_200hz_default_settings():
     t, p, q = ellipse_poses(200)
     spl, rep = fit(t, p, q, return_report=True)
     eg, ea = imu_errors(spl, 1.0, 29.0)
-    assert eg <= 1e-5 and ea <= 1e-3, (eg, ea, rep.order, rep.knot_spacing_s)
-    # near the ends the errors stay within 10x of the interior figures
+    # measured 1.8e-8 rad/s, 3.2e-9 m/s^2
+    assert eg <= 1.8e-7 and ea <= 3.2e-8, (eg, ea, rep.order, rep.knot_spacing_s)
+    # near the ends: measured gyro 1.7e-8, accel 7.4e-4 (the last segments see one-sided data, and
+    # exact poses get knots at the pose spacing there)
     for a, b in ((0.0, 1.0), (29.0, 30.0)):
         eg_end, ea_end = imu_errors(spl, a, b, 0.001)
-        assert eg_end <= 10 * max(eg, 1e-6) and ea_end <= 10 * max(ea, 1e-4), (a, eg_end, ea_end)
-    assert rep.residual_position_rms_m < 1e-6
+        assert eg_end <= 2e-7 and ea_end <= 7.5e-3, (a, eg_end, ea_end)
+    assert rep.residual_position_rms_m < 1.2e-13  # measured 1.1e-14
 
 
 def test_clean_200hz_order6_fine_knots():
     t, p, q = ellipse_poses(200)
     spl = fit(t, p, q, order=6, knot_spacing_s=0.01)
     eg, ea = imu_errors(spl, 1.0, 29.0)
-    assert eg <= 1e-8 and ea <= 1e-6, (eg, ea)
+    assert eg <= 1e-9 and ea <= 9e-8, (eg, ea)  # measured 1.1e-10, 8.9e-9
 
 
 def test_clean_30hz_default_settings():
     t, p, q = ellipse_poses(30)
     spl = fit(t, p, q)
     eg, ea = imu_errors(spl, 1.0, 29.0)
-    assert eg <= 1e-4 and ea <= 1e-2, (eg, ea)
+    assert eg <= 1.7e-6 and ea <= 1.2e-4, (eg, ea)  # measured 1.7e-7, 1.2e-5
 
 
 def test_clean_cubic_is_far_better_than_poses_as_control_points():
@@ -139,7 +142,7 @@ def test_clean_cubic_is_far_better_than_poses_as_control_points():
     naive = Spline.from_control_points(t[0] - 0.01, 0.01, p[::step], q[::step], order=4)
     _, ea_fit = imu_errors(fitted, 2.0, 28.0)
     _, ea_naive = imu_errors(naive, 2.0, 28.0)
-    assert ea_naive > 30 * ea_fit, (ea_naive, ea_fit)
+    assert ea_naive > 300 * ea_fit, (ea_naive, ea_fit)  # measured 970x
 
 
 def test_noisy_mocap_is_smoothed_near_the_best_fixed_spacing():
@@ -149,8 +152,9 @@ def test_noisy_mocap_is_smoothed_near_the_best_fixed_spacing():
     eg, ea = imu_errors(spl, 1.0, 29.0)
     assert eg <= 3e-3 and ea <= 3e-2, (eg, ea, rep.order, rep.knot_spacing_s)
     kc = rep.knot_choice
-    assert abs(kc["position_noise_m"] - 1e-3) < 1.5e-4
-    assert abs(kc["angle_noise_rad"] - np.radians(0.1)) < 3e-4
+    # the held-out prediction error is the pose noise (and a little fit error)
+    assert abs(kc["position_noise_m"] / 1e-3 - 1) < 0.1, kc["position_noise_m"]
+    assert abs(kc["angle_noise_rad"] / np.radians(0.1) - 1) < 0.1, kc["angle_noise_rad"]
     best = min(imu_errors(fit(t, p, q, order=rep.order, knot_spacing_s=ks), 1.0, 29.0)[1]
                for ks in (0.2, 0.25, 0.3, 0.35, 0.4))
     assert ea <= 1.3 * best, (ea, best)
@@ -163,8 +167,9 @@ def test_se3_fit_of_a_screw_recovers_the_twist():
     spl = fit(t, k.position_world, k.quat_xyzw, kind="se3", order=4, knot_spacing_s=0.05)
     ti = np.linspace(0.5, 5.5, 200)
     w = spl.angular_velocity_body(ti)
-    np.testing.assert_allclose(w, scene.kinematics(ti).omega_body, atol=1e-6)
-    np.testing.assert_allclose(spl.acceleration_world(ti), scene.kinematics(ti).accel_world, atol=1e-4)
+    # measured 1.1e-14 rad/s and 1.6e-12 m/s^2: a screw is exactly an SE3 spline
+    np.testing.assert_allclose(w, scene.kinematics(ti).omega_body, rtol=0, atol=1e-13)
+    np.testing.assert_allclose(spl.acceleration_world(ti), scene.kinematics(ti).accel_world, rtol=0, atol=2e-11)
 
 
 def test_fit_bridges_a_gap_smoothly_and_covers_the_span():
@@ -173,7 +178,7 @@ def test_fit_bridges_a_gap_smoothly_and_covers_the_span():
     spl = fit(t[keep], p[keep], q[keep], order=4, knot_spacing_s=0.05)
     assert spl.t_min_s == t[keep][0] and abs(spl.t_max_s - t[keep][-1]) < 1e-12
     eg, ea = imu_errors(spl, 8.0, 9.0)
-    assert eg < 0.05 and ea < 3.0, (eg, ea)  # bridged, not wild
+    assert eg < 0.016 and ea < 3.7, (eg, ea)  # bridged, not wild; measured 1.6e-3, 0.37
 
 
 def test_quaternion_sign_flips_in_the_input_do_not_matter():
@@ -192,14 +197,14 @@ def test_epoch_times_keep_precision():
     assert spl.origin_ns == origin
     t_ns = origin + np.array([1_000_000_000, 5_000_000_001])
     g = spl.imu(spl.t_s_from_ns(t_ns))[0]
-    np.testing.assert_allclose(g, ELLIPSE.imu([1.0, 5.000000001])[0], atol=1e-5)
+    np.testing.assert_allclose(g, ELLIPSE.imu([1.0, 5.000000001])[0], rtol=0, atol=9e-7)  # measured 8.7e-8
 
 
 def test_fit_rejects_bad_input():
     t, p, q = ellipse_poses(50, duration=2.0)
     with pytest.raises(SplineImuError, match="strictly increasing"):
         fit(t[::-1], p, q)
-    with pytest.raises(SplineImuError, match="NaN"):
+    with pytest.raises(InputError, match="NaN"):
         p2 = p.copy()
         p2[3, 0] = np.nan
         fit(t, p2, q)

@@ -9,7 +9,7 @@ import pytest
 
 from splineimu import Spline, lie
 from splineimu._kernels import spline as _k
-from splineimu._kernels.spline_imu import BLOCK, KNOT_ANGLE, KNOT_COLS, KNOT_D, KNOT_P, split_imu_knots
+from splineimu._kernels.spline_imu import BLOCK, KNOT_ANGLE, KNOT_COLS, KNOT_D, split_imu_knots
 
 # Both kernels share the rounding of the basis and of the acceleration (the same power sums in
 # the same order); they differ in how they rotate (Taylor polynomials and Rodrigues on the
@@ -133,29 +133,77 @@ def test_output_arrays():
     for a in (gyro, f):
         assert a.shape == (11, 3) and a.dtype == np.float64 and a.flags.c_contiguous and a.flags.writeable
     assert not np.shares_memory(gyro, f)
-    gyro[:] = 0.0  # writing one leaves the other alone
-    assert np.all(np.isfinite(f)) and np.abs(f).max() > 0
+    f_before = f.copy()
+    gyro[:] = np.nan  # writing one leaves the other alone
+    np.testing.assert_array_equal(f, f_before)
     g0, f0 = spl.imu(np.array([]))
     assert g0.shape == (0, 3) and f0.shape == (0, 3)
 
 
-def test_se3_splines_keep_the_general_kernel():
+def test_se3_imu_matches_differenced_poses():
+    """se3 splines: gyro and specific force against central differences of the spline's own
+    poses (an independent path: rotations and positions only, no derivative recursion)."""
     rng = np.random.default_rng(2)
     n = 10
     pos = np.cumsum(rng.normal(size=(n, 3)), axis=0)
     spl = Spline(0.0, 0.1, pos, lie.so3_exp(rng.normal(size=(n, 3))), kind="se3", order=5)
-    t = np.linspace(spl.t_min_s, spl.t_max_s, 50)
-    gyro, f = spl.imu(t)
-    w_ref, f_ref = general_kernel(spl, t, np.array([0.0, 0.0, -9.81]))
-    np.testing.assert_array_equal(gyro, w_ref)
-    np.testing.assert_array_equal(f, f_ref)
+    t = np.linspace(spl.t_min_s + 0.01, spl.t_max_s - 0.01, 50)
+    gravity = np.array([0.0, 0.0, -9.81])
+    gyro, f = spl.imu(t, gravity=gravity)
+    h = 1e-5
+    R_m, R_p = spl.rotation_matrix(t - h), spl.rotation_matrix(t + h)
+    w_num = lie.so3_log(np.matmul(np.swapaxes(R_m, 1, 2), R_p)) / (2 * h)
+    # the body rate at t is the rate of R(t-h)^T R(t+h) up to O(h^2)
+    h = 2e-4
+    p_m, p_0, p_p = (spl.pose(t + d)[0] for d in (-h, 0.0, h))
+    a_num = (p_p - 2 * p_0 + p_m) / h**2
+    f_num = np.einsum("nji,nj->ni", spl.rotation_matrix(t), a_num - gravity)
+    scale_w = np.abs(gyro).max()
+    scale_f = np.abs(f).max()
+    # measured 1.0e-8 and 4.3e-6 relative (O(h^2) truncation of the differences)
+    assert np.abs(gyro - w_num).max() <= 1e-7 * scale_w, np.abs(gyro - w_num).max() / scale_w
+    assert np.abs(f - f_num).max() <= 4e-5 * scale_f, np.abs(f - f_num).max() / scale_f
 
 
 def test_knot_table():
     spl = random_split_spline(4, 5)
-    K = split_imu_knots(spl._D, spl.control_positions)
+    K = split_imu_knots(spl._D)
     assert K.shape == (spl.n_control, KNOT_COLS) and K.flags.c_contiguous
     np.testing.assert_array_equal(K[:, KNOT_D:KNOT_D + 3], spl._D)
-    np.testing.assert_array_equal(K[:, KNOT_P:KNOT_P + 3], spl.control_positions)
     np.testing.assert_allclose(K[:, KNOT_ANGLE], np.linalg.norm(spl._D, axis=1), rtol=1e-15)
     assert K[0, KNOT_ANGLE] == 0.0
+
+
+@pytest.mark.parametrize("orders", [(4, 6), (6, 4), (5, 5)])
+def test_separate_position_grid(orders):
+    """Rotation and position on their own grids: the vectorized kernel agrees with the general
+    one, and the position part is the ordinary B-spline of its own control points (scipy)."""
+    from scipy.interpolate import BSpline
+
+    k_rot, k_pos = orders
+    rng = np.random.default_rng(11)
+    n_rot, dt_rot = 12, 0.3
+    rot = random_split_spline(k_rot, 3, n=n_rot)
+    t0 = 0.1
+    span = (n_rot - k_rot + 1) * dt_rot
+    dt_pos = span / 23
+    n_pos = 23 + k_pos - 1
+    pos = np.cumsum(rng.normal(size=(n_pos, 3)), axis=0)
+    spl = Spline(t0, dt_rot, pos, rot.control_rotations, kind="split", order=k_rot, position_t0_s=t0,
+                 position_dt_s=dt_pos, position_order=k_pos)
+    assert abs(spl.t_max_s - (t0 + span)) < 1e-12
+    t = np.r_[rng.uniform(spl.t_min_s, spl.t_max_s, 300), spl.t_min_s, spl.t_max_s]
+    g = np.array([0.2, -0.1, -9.81])
+    gyro, f = spl.imu(t, gravity=g)
+    w_ref, f_ref = general_kernel(spl, t, g)
+    assert_vectors_close(gyro, w_ref, "gyro")
+    assert_vectors_close(f, f_ref, "specific force")
+    # position: scipy's B-spline on the uniform knot vector of the position grid
+    knots = t0 + dt_pos * (np.arange(n_pos + k_pos) - (k_pos - 1))
+    ref = BSpline(knots, pos, k_pos - 1)
+    np.testing.assert_allclose(spl.pose(t)[0], ref(t), rtol=0, atol=1e-11 * np.abs(pos).max())
+    np.testing.assert_allclose(spl.acceleration_world(t), ref.derivative(2)(t), rtol=0,
+                               atol=1e-9 * np.abs(pos).max() / dt_pos**2)
+    # the rotation is that of the rotation grid alone
+    alone = Spline(t0, dt_rot, np.zeros((n_rot, 3)), rot.control_rotations, kind="split", order=k_rot)
+    np.testing.assert_array_equal(spl.rotation_matrix(t), alone.rotation_matrix(t))

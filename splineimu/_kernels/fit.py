@@ -20,81 +20,69 @@ import numpy as np
 
 from .._jit import jit
 from .lie import (
-    se3_q_block_into,
+    se3_adjoint_into,
+    se3_exp_into,
+    se3_jacobian_into,
+    se3_jacobian_inv_into,
     so3_exp_into,
     so3_jacobian_into,
     so3_jacobian_inv_into,
     so3_log_into,
 )
-from .lie import so3_hat_into as _hat_into
-from .spline import _segment
+from .spline import _segment, basis_into
 
 
 @jit
-def _cum_basis(Mc, u, b):
-    k = Mc.shape[0]
-    for j in range(k):
-        acc = 0.0
-        un = 1.0
-        for n in range(k):
-            acc += Mc[j, n] * un
-            un *= u
-        b[j] = acc
+def _accumulate(Jm, r, z0, z1, w, seg, H, g):
+    """Add ``w J^T J`` and ``w J^T r`` over residual rows ``z0 .. z1-1`` to the banded blocks
+    (``Jm`` (k, d, d): the residual's Jacobian blocks on control points ``seg .. seg+k-1``)."""
+    k = Jm.shape[0]
+    d = Jm.shape[2]
+    for a in range(k):
+        for c in range(k - a):
+            for r0 in range(d):
+                for c0 in range(d):
+                    s = 0.0
+                    for z in range(z0, z1):
+                        s += Jm[a, z, r0] * Jm[a + c, z, c0]
+                    H[seg + a, c, r0, c0] += w * s
+        for r0 in range(d):
+            s = 0.0
+            for z in range(z0, z1):
+                s += Jm[a, z, r0] * r[z]
+            g[seg + a, r0] += w * s
 
 
 @jit
-def _basis(M, u, b):
-    _cum_basis(M, u, b)
-
-
-@jit
-def _mm(A, B, C):
-    """C = A @ B for square matrices of equal size."""
+def _mm(A, B, C, transpose_a=False):
+    """C = A @ B (or A^T @ B) for square matrices of equal size."""
     n = A.shape[0]
     for i in range(n):
         for j in range(n):
             s = 0.0
             for m in range(n):
-                s += A[i, m] * B[m, j]
+                s += (A[m, i] if transpose_a else A[i, m]) * B[m, j]
             C[i, j] = s
 
 
 @jit
-def _mtm(A, B, C):
-    """C = A^T @ B."""
-    n = A.shape[0]
-    for i in range(n):
-        for j in range(n):
-            s = 0.0
-            for m in range(n):
-                s += A[m, i] * B[m, j]
-            C[i, j] = s
-
-
-@jit
-def position_normal_equations(s_all, w_all, P_meas, Mc_plain, nseg, H, rhs):
-    """Split spline position: H (n, k) banded scalar blocks, rhs (n, 3); plain basis."""
-    k = Mc_plain.shape[0]
-    b = np.empty(k)
-    for m in range(s_all.shape[0]):
-        seg, u = _segment(s_all[m], nseg)
-        _basis(Mc_plain, u, b)
-        w = w_all[m]
-        for a in range(k):
-            wa = w * b[a]
-            for c in range(k - a):
-                H[seg + a, c] += wa * b[a + c]
-            for d in range(3):
-                rhs[seg + a, d] += wa * P_meas[m, d]
+def _add_product(X, B, E, out, sign):
+    """``out += sign * X @ B`` for square matrices (``E`` scratch)."""
+    _mm(X, B, E)
+    d = E.shape[0]
+    for r0 in range(d):
+        for c0 in range(d):
+            out[r0, c0] += sign * E[r0, c0]
 
 
 @jit
 def position_residuals(s_all, P_meas, Pc, M_plain, nseg, out):
     k = M_plain.shape[0]
     b = np.empty(k)
+    bd = np.empty(k)
     for m in range(s_all.shape[0]):
         seg, u = _segment(s_all[m], nseg)
-        _basis(M_plain, u, b)
+        basis_into(M_plain, u, 1.0, b, bd, bd)
         for d in range(3):
             acc = 0.0
             for j in range(k):
@@ -110,6 +98,7 @@ def so3_normal_equations(s_all, w_all, R_meas, Rc, D, Mc, nseg, H, g, res):
     """
     k = Mc.shape[0]
     b = np.empty(k)
+    bd = np.empty(k)
     A = np.empty((k, 3, 3))
     P = np.empty((k, 3, 3))  # suffix products P_j = A_{j+1} .. A_{k-1}
     R = np.empty((3, 3))
@@ -126,7 +115,7 @@ def so3_normal_equations(s_all, w_all, R_meas, Rc, D, Mc, nseg, H, g, res):
     cost = 0.0
     for m in range(s_all.shape[0]):
         seg, u = _segment(s_all[m], nseg)
-        _cum_basis(Mc, u, b)
+        basis_into(Mc, u, 1.0, b, bd, bd)
         for j in range(1, k):
             so3_exp_into(b[j] * D[seg + j, 0], b[j] * D[seg + j, 1], b[j] * D[seg + j, 2], A[j])
         # suffix products
@@ -138,7 +127,7 @@ def so3_normal_equations(s_all, w_all, R_meas, Rc, D, Mc, nseg, H, g, res):
         # R(t) = R_s P_0
         _mm(Rc[seg], P[0], R)
         # residual r = Log(R^T R_meas)
-        _mtm(R, R_meas[m], T)
+        _mm(R, R_meas[m], T, True)
         so3_log_into(T, q, r)
         for d in range(3):
             res[m, d] = r[d]
@@ -156,105 +145,45 @@ def so3_normal_equations(s_all, w_all, R_meas, Rc, D, Mc, nseg, H, g, res):
             dj2 = D[seg + j, 2]
             so3_jacobian_into(b[j] * dj0, b[j] * dj1, b[j] * dj2, -1.0, Jr_b)
             # X = P_j^T b_j Jr(b_j d_j)
-            _mtm(P[j], Jr_b, X)
+            _mm(P[j], Jr_b, X, True)
             for r0 in range(3):
                 for c0 in range(3):
                     X[r0, c0] *= b[j]
             # + X Jr^-1(d_j) on delta_{s+j}
             so3_jacobian_inv_into(dj0, dj1, dj2, -1.0, Jinv)
-            _mm(X, Jinv, E)
-            for r0 in range(3):
-                for c0 in range(3):
-                    G[j, r0, c0] += E[r0, c0]
+            _add_product(X, Jinv, E, G[j], 1.0)
             # - X Jl^-1(d_j) on delta_{s+j-1}
             so3_jacobian_inv_into(dj0, dj1, dj2, 1.0, Jinv)
-            _mm(X, Jinv, E)
-            for r0 in range(3):
-                for c0 in range(3):
-                    G[j - 1, r0, c0] -= E[r0, c0]
+            _add_product(X, Jinv, E, G[j - 1], -1.0)
         # Jm_i = -Jl^-1(r) G_i
+        Jm[:] = 0.0
         for i in range(k):
-            _mm(Jl_inv_r, G[i], E)
-            for r0 in range(3):
-                for c0 in range(3):
-                    Jm[i, r0, c0] = -E[r0, c0]
-        for a in range(k):
-            for c in range(k - a):
-                for r0 in range(3):
-                    for c0 in range(3):
-                        s = 0.0
-                        for z in range(3):
-                            s += Jm[a, z, r0] * Jm[a + c, z, c0]
-                        H[seg + a, c, r0, c0] += w * s
-            for r0 in range(3):
-                s = 0.0
-                for z in range(3):
-                    s += Jm[a, z, r0] * r[z]
-                g[seg + a, r0] += w * s
+            _add_product(Jl_inv_r, G[i], E, Jm[i], -1.0)
+        _accumulate(Jm, r, 0, 3, w, seg, H, g)
     return cost
 
 
 # --------------------------------------------------------------------------------- SE3
 @jit
-def _se3_exp_into(xi, R, t, Jscratch):
-    so3_exp_into(xi[3], xi[4], xi[5], R)
-    so3_jacobian_into(xi[3], xi[4], xi[5], 1.0, Jscratch)
+def _adj_inv_into(R, t, Ad, RT, tt):
+    """Ad_{T^-1} for T = (R, t): the adjoint of (R^T, -R^T t). RT (3, 3), tt (3,) scratch."""
     for r0 in range(3):
-        t[r0] = Jscratch[r0, 0] * xi[0] + Jscratch[r0, 1] * xi[1] + Jscratch[r0, 2] * xi[2]
-
-
-@jit
-def _se3_jac_into(xi, sign, inverse, J, scratch, Q, S3):
-    """6x6 SE3 Jacobian (sign=-1 right, +1 left), or its inverse."""
-    for r0 in range(3):
+        tt[r0] = -(R[0, r0] * t[0] + R[1, r0] * t[1] + R[2, r0] * t[2])
         for c0 in range(3):
-            J[3 + r0, c0] = 0.0
-    if inverse:
-        so3_jacobian_inv_into(xi[3], xi[4], xi[5], sign, S3)
-    else:
-        so3_jacobian_into(xi[3], xi[4], xi[5], sign, S3)
-    for r0 in range(3):
-        for c0 in range(3):
-            J[r0, c0] = S3[r0, c0]
-            J[3 + r0, 3 + c0] = S3[r0, c0]
-    se3_q_block_into(xi[:3], xi[3:], sign, Q, scratch)
-    if inverse:
-        for r0 in range(3):
-            for c0 in range(3):
-                s = 0.0
-                for m in range(3):
-                    for n in range(3):
-                        s += S3[r0, m] * Q[m, n] * S3[n, c0]
-                J[r0, 3 + c0] = -s
-    else:
-        for r0 in range(3):
-            for c0 in range(3):
-                J[r0, 3 + c0] = Q[r0, c0]
-
-
-@jit
-def _adj_inv_into(R, t, Ad, K):
-    """Ad_{T^-1} for T = (R, t): [[R^T, -R^T [t]x], [0, R^T]]."""
-    _hat_into(t[0], t[1], t[2], K)
-    for r0 in range(3):
-        for c0 in range(3):
-            Ad[r0, c0] = R[c0, r0]
-            Ad[3 + r0, 3 + c0] = R[c0, r0]
-            Ad[3 + r0, c0] = 0.0
-            s = 0.0
-            for m in range(3):
-                s += R[m, r0] * K[m, c0]
-            Ad[r0, 3 + c0] = -s
+            RT[r0, c0] = R[c0, r0]
+    se3_adjoint_into(RT, tt, Ad)
 
 
 @jit
 def se3_normal_equations(s_all, w6, R_meas, p_meas, Rc, pc, D, Mc, nseg, H, g, res):
     """Gauss-Newton blocks for SE3 residuals ``Log(T(t)^-1 T_meas)`` = [rho, phi].
 
-    w6 (M, 6) diagonal weights. H (n, k, 6, 6), g (n, 6), res (M, 6). Returns the cost.
+    w6 (M, 6) diagonal weights, equal within the translation rows and within the rotation rows.
+    H (n, k, 6, 6), g (n, 6), res (M, 6). Returns the cost.
     """
     k = Mc.shape[0]
     b = np.empty(k)
+    bd = np.empty(k)
     AR = np.empty((k, 3, 3))
     At = np.empty((k, 3))
     PR = np.empty((k, 3, 3))
@@ -267,10 +196,9 @@ def se3_normal_equations(s_all, w6, R_meas, p_meas, Rc, pc, D, Mc, nseg, H, g, r
     q = np.empty(4)
     r = np.empty(6)
     xi = np.empty(6)
-    scratch = np.empty((4, 3, 3))
-    Q = np.empty((3, 3))
-    S3 = np.empty((3, 3))
-    K = np.empty((3, 3))
+    scratch = np.empty((5, 3, 3))
+    RT = np.empty((3, 3))
+    tt = np.empty(3)
     Jl_inv_r = np.empty((6, 6))
     Jr_b = np.empty((6, 6))
     Jinv = np.empty((6, 6))
@@ -282,11 +210,11 @@ def se3_normal_equations(s_all, w6, R_meas, p_meas, Rc, pc, D, Mc, nseg, H, g, r
     cost = 0.0
     for m in range(s_all.shape[0]):
         seg, u = _segment(s_all[m], nseg)
-        _cum_basis(Mc, u, b)
+        basis_into(Mc, u, 1.0, b, bd, bd)
         for j in range(1, k):
             for z in range(6):
                 xi[z] = b[j] * D[seg + j, z]
-            _se3_exp_into(xi, AR[j], At[j], J3)
+            se3_exp_into(xi, AR[j], At[j], J3)
         # suffix products P_j = A_{j+1} .. A_{k-1} (as R, t)
         for r0 in range(3):
             Pt[k - 1, r0] = 0.0
@@ -302,7 +230,7 @@ def se3_normal_equations(s_all, w6, R_meas, p_meas, Rc, pc, D, Mc, nseg, H, g, r
         for r0 in range(3):
             t[r0] = pc[seg, r0] + Rc[seg, r0, 0] * Pt[0, 0] + Rc[seg, r0, 1] * Pt[0, 1] + Rc[seg, r0, 2] * Pt[0, 2]
         # residual: Log(T^-1 T_meas) = Log(R^T R_m, R^T (p_m - t))
-        _mtm(R, R_meas[m], TR)
+        _mm(R, R_meas[m], TR, True)
         for r0 in range(3):
             tt[r0] = (R[0, r0] * (p_meas[m, 0] - t[0]) + R[1, r0] * (p_meas[m, 1] - t[1])
                       + R[2, r0] * (p_meas[m, 2] - t[2]))
@@ -313,9 +241,9 @@ def se3_normal_equations(s_all, w6, R_meas, p_meas, Rc, pc, D, Mc, nseg, H, g, r
         for z in range(6):
             res[m, z] = r[z]
             cost += w6[m, z] * r[z] * r[z]
-        _se3_jac_into(r, 1.0, True, Jl_inv_r, scratch, Q, S3)
+        se3_jacobian_inv_into(r, 1.0, Jl_inv_r, scratch)
         # G_0 = Ad_{P_0^-1}
-        _adj_inv_into(PR[0], Pt[0], G[0], K)
+        _adj_inv_into(PR[0], Pt[0], G[0], RT, tt)
         for i in range(1, k):
             for r0 in range(6):
                 for c0 in range(6):
@@ -323,60 +251,149 @@ def se3_normal_equations(s_all, w6, R_meas, p_meas, Rc, pc, D, Mc, nseg, H, g, r
         for j in range(1, k):
             for z in range(6):
                 xi[z] = b[j] * D[seg + j, z]
-            _se3_jac_into(xi, -1.0, False, Jr_b, scratch, Q, S3)
-            _adj_inv_into(PR[j], Pt[j], Ad, K)
+            se3_jacobian_into(xi, -1.0, Jr_b, scratch)
+            _adj_inv_into(PR[j], Pt[j], Ad, RT, tt)
             _mm(Ad, Jr_b, X)
             for r0 in range(6):
                 for c0 in range(6):
                     X[r0, c0] *= b[j]
-            _se3_jac_into(D[seg + j], -1.0, True, Jinv, scratch, Q, S3)
-            _mm(X, Jinv, E)
-            for r0 in range(6):
-                for c0 in range(6):
-                    G[j, r0, c0] += E[r0, c0]
-            _se3_jac_into(D[seg + j], 1.0, True, Jinv, scratch, Q, S3)
-            _mm(X, Jinv, E)
-            for r0 in range(6):
-                for c0 in range(6):
-                    G[j - 1, r0, c0] -= E[r0, c0]
+            se3_jacobian_inv_into(D[seg + j], -1.0, Jinv, scratch)
+            _add_product(X, Jinv, E, G[j], 1.0)
+            se3_jacobian_inv_into(D[seg + j], 1.0, Jinv, scratch)
+            _add_product(X, Jinv, E, G[j - 1], -1.0)
+        Jm[:] = 0.0
         for i in range(k):
-            _mm(Jl_inv_r, G[i], E)
-            for r0 in range(6):
-                for c0 in range(6):
-                    Jm[i, r0, c0] = -E[r0, c0]
-        for a in range(k):
-            for c in range(k - a):
-                for r0 in range(6):
-                    for c0 in range(6):
-                        s = 0.0
-                        for z in range(6):
-                            s += Jm[a, z, r0] * w6[m, z] * Jm[a + c, z, c0]
-                        H[seg + a, c, r0, c0] += s
-            for r0 in range(6):
-                s = 0.0
-                for z in range(6):
-                    s += Jm[a, z, r0] * w6[m, z] * r[z]
-                g[seg + a, r0] += s
+            _add_product(Jl_inv_r, G[i], E, Jm[i], -1.0)
+        # translation and rotation rows carry one weight each
+        _accumulate(Jm, r, 0, 3, w6[m, 0], seg, H, g)
+        _accumulate(Jm, r, 3, 6, w6[m, 3], seg, H, g)
     return cost
 
 
+# ------------------------------------------------------------------- cross-validation
 @jit
-def blocks_to_lapack_upper(H, ab):
-    """Block-banded (n, k, d, d) upper blocks -> LAPACK upper banded storage (u + 1, n d),
-    ``ab[u + i - j, j] = A[i, j]`` for ``i <= j``, with ``u = k d - 1``."""
+def fold_normal_equations(s_all, w_all, fold, X, M, nseg, H, rhs):
+    """Per-fold contributions of an ordinary B-spline fit of ``X`` (N, d).
+
+    ``fold`` (N,) int in [0, F); H (F, n, k) banded scalar blocks and rhs (F, n, d) receive the
+    poses of each fold; the training system of fold f is the sum over the others.
+    """
+    k = M.shape[0]
+    d = X.shape[1]
+    b = np.empty(k)
+    bd = np.empty(k)
+    for m in range(s_all.shape[0]):
+        seg, u = _segment(s_all[m], nseg)
+        basis_into(M, u, 1.0, b, bd, bd)
+        f = fold[m]
+        w = w_all[m]
+        for a in range(k):
+            wa = w * b[a]
+            for c in range(k - a):
+                H[f, seg + a, c] += wa * b[a + c]
+            for z in range(d):
+                rhs[f, seg + a, z] += wa * X[m, z]
+
+
+@jit
+def fold_prediction_errors(s_all, fold, X, C, M, nseg, out):
+    """``out[m] = |X_m - x_f(t_m)|^2`` with ``x_f`` the spline of control points ``C[f]`` (F, n, d),
+    ``f = fold[m]``: the error of predicting each pose from a fit that did not see it."""
+    k = M.shape[0]
+    d = X.shape[1]
+    b = np.empty(k)
+    bd = np.empty(k)
+    for m in range(s_all.shape[0]):
+        seg, u = _segment(s_all[m], nseg)
+        basis_into(M, u, 1.0, b, bd, bd)
+        f = fold[m]
+        e2 = 0.0
+        for z in range(d):
+            acc = 0.0
+            for j in range(k):
+                acc += b[j] * C[f, seg + j, z]
+            e = X[m, z] - acc
+            e2 += e * e
+        out[m] = e2
+
+
+@jit
+def spline_derivative(s_all, C, M, nseg, inv_dt, r, out):
+    """``r``-th time derivative (r = 0, 1, 2) of the ordinary B-spline with control points C (n, d)."""
+    k = M.shape[0]
+    d = C.shape[1]
+    b = np.empty(k)
+    bd = np.empty(k)
+    bdd = np.empty(k)
+    for m in range(s_all.shape[0]):
+        seg, u = _segment(s_all[m], nseg)
+        basis_into(M, u, inv_dt, b, bd, bdd)
+        for z in range(d):
+            acc = 0.0
+            for j in range(k):
+                x = b[j] if r == 0 else (bd[j] if r == 1 else bdd[j])
+                acc += x * C[seg + j, z]
+            out[m, z] = acc
+
+
+# ------------------------------------------------------------------- banded solves
+@jit
+def blocks_to_band(H, out):
+    """Block-banded (n, k, d, d) upper blocks -> scalar upper band ``out`` (n d, k d),
+    ``out[i, c] = A[i, i + c]``."""
     n = H.shape[0]
     k = H.shape[1]
     d = H.shape[2]
-    u = k * d - 1
     for bi in range(n):
         for c in range(k):
-            bj = bi + c
-            if bj >= n:
+            if bi + c >= n:
                 break
             for r0 in range(d):
-                i = bi * d + r0
                 for c0 in range(d):
-                    j = bj * d + c0
-                    if c == 0 and c0 < r0:
-                        continue
-                    ab[u + i - j, j] = H[bi, c, r0, c0]
+                    off = c * d + c0 - r0
+                    if off >= 0:
+                        out[bi * d + r0, off] = H[bi, c, r0, c0]
+
+
+@jit
+def band_cholesky_solve(A, B):
+    """Solve ``A X = B`` in place of ``B`` (n, m) for the symmetric positive definite band
+    matrix with upper diagonals ``A`` (n, w) (``A[i, c]`` = entry (i, i + c)); ``A`` is
+    overwritten by its factor ``U`` (A = U^T U). Returns False if A is not positive definite."""
+    n = A.shape[0]
+    w = A.shape[1]
+    m = B.shape[1]
+    for i in range(n):
+        for c in range(w):
+            if i + c >= n:
+                break
+            s = A[i, c]
+            for q in range(1, w - c):
+                if i - q < 0:
+                    break
+                s -= A[i - q, q] * A[i - q, q + c]
+            if c == 0:
+                if not s > 0.0:
+                    return False
+                A[i, 0] = np.sqrt(s)
+            else:
+                A[i, c] = s / A[i, 0]
+    # U^T y = b
+    for i in range(n):
+        for z in range(m):
+            s = B[i, z]
+            for q in range(1, w):
+                if i - q < 0:
+                    break
+                s -= A[i - q, q] * B[i - q, z]
+            B[i, z] = s / A[i, 0]
+    # U x = y
+    for i in range(n - 1, -1, -1):
+        for z in range(m):
+            s = B[i, z]
+            for c in range(1, w):
+                if i + c >= n:
+                    break
+                s -= A[i, c] * B[i + c, z]
+            B[i, z] = s / A[i, 0]
+    return True

@@ -44,16 +44,18 @@ def _segment(s, nseg):
 
 
 @jit
-def _basis_rows(Mc, M, u, inv_dt, b, bd, bdd, pb, pbd, pbdd):
-    """Cumulative (b*) and plain (pb*) basis values with time derivatives."""
-    k = Mc.shape[0]
+def basis_into(M, u, inv_dt, b, bd, bdd):
+    """The one basis evaluation of every kernel: ``b = M [1, u, .., u^(k-1)]`` and its first and
+    second time derivatives (``d/du`` scaled by ``inv_dt`` per order) into ``b, bd, bdd`` (k,).
+
+    ``M`` is the plain or the cumulative blending matrix of :mod:`splineimu.spline.basis`.
+    The power sums run in a fixed order (``n = 0 .. k-1``), so all kernels round alike.
+    """
+    k = M.shape[0]
     for j in range(k):
         s0 = 0.0
         s1 = 0.0
         s2 = 0.0
-        p0 = 0.0
-        p1 = 0.0
-        p2 = 0.0
         un = 1.0  # u^n
         un1 = 0.0  # n u^(n-1)
         un2 = 0.0  # n (n-1) u^(n-2)
@@ -66,32 +68,97 @@ def _basis_rows(Mc, M, u, inv_dt, b, bd, bdd, pb, pbd, pbdd):
                 un = un * u
                 un1 = n * um1
                 un2 = n * (n - 1) * um2 if n >= 2 else 0.0
-            s0 += Mc[j, n] * un
-            s1 += Mc[j, n] * un1
-            s2 += Mc[j, n] * un2
-            p0 += M[j, n] * un
-            p1 += M[j, n] * un1
-            p2 += M[j, n] * un2
+            s0 += M[j, n] * un
+            s1 += M[j, n] * un1
+            s2 += M[j, n] * un2
         b[j] = s0
         bd[j] = s1 * inv_dt
         bdd[j] = s2 * inv_dt * inv_dt
-        pb[j] = p0
-        pbd[j] = p1 * inv_dt
-        pbdd[j] = p2 * inv_dt * inv_dt
 
 
 @jit
-def eval_split(s_all, nseg, dt, Rc, D, Pc, Mc, M, g, want,
+def basis_table(M, u_all, inv_dt, out):
+    """Basis rows at every ``u_all`` (N,): ``out`` (3, N, k) = values, first, second time derivative."""
+    for i in range(u_all.shape[0]):
+        basis_into(M, u_all[i], inv_dt, out[0, i], out[1, i], out[2, i])
+
+
+@jit(inline="always")
+def _transpose_times(A, x0, x1, x2):
+    """``A^T x`` for a 3x3 matrix and a vector given by its components."""
+    return (A[0, 0] * x0 + A[1, 0] * x1 + A[2, 0] * x2,
+            A[0, 1] * x0 + A[1, 1] * x1 + A[2, 1] * x2,
+            A[0, 2] * x0 + A[1, 2] * x1 + A[2, 2] * x2)
+
+
+@jit(inline="always")
+def _times(A, x0, x1, x2):
+    """``A x`` for a 3x3 matrix and a vector given by its components."""
+    return (A[0, 0] * x0 + A[0, 1] * x1 + A[0, 2] * x2,
+            A[1, 0] * x0 + A[1, 1] * x1 + A[1, 2] * x2,
+            A[2, 0] * x0 + A[2, 1] * x1 + A[2, 2] * x2)
+
+
+@jit(inline="always")
+def _times_right(R, A, T):
+    """``R <- R A`` for 3x3 matrices (``T`` scratch)."""
+    for r in range(3):
+        x0 = R[r, 0]
+        x1 = R[r, 1]
+        x2 = R[r, 2]
+        T[r, 0] = x0 * A[0, 0] + x1 * A[1, 0] + x2 * A[2, 0]
+        T[r, 1] = x0 * A[0, 1] + x1 * A[1, 1] + x2 * A[2, 1]
+        T[r, 2] = x0 * A[0, 2] + x1 * A[1, 2] + x2 * A[2, 2]
+    for r in range(3):
+        R[r, 0] = T[r, 0]
+        R[r, 1] = T[r, 1]
+        R[r, 2] = T[r, 2]
+
+
+@jit(inline="always")
+def _write_vector(i, x0, x1, x2, out):
+    out[i, 0] = x0
+    out[i, 1] = x1
+    out[i, 2] = x2
+
+
+@jit(inline="always")
+def _write_outputs(i, want, R, q, p0, p1, p2, w0, w1, w2, a0, a1, a2, out_R, out_q, out_p, out_w, out_wd):
+    """Rotation, quaternion (x, y, z, w), position, body rate and its derivative of sample ``i``."""
+    if want & WANT_ROT:
+        for r in range(3):
+            for c in range(3):
+                out_R[i, r, c] = R[r, c]
+    if want & WANT_QUAT:
+        mat_to_quat_wxyz_into(R, q)
+        out_q[i, 0] = q[1]
+        out_q[i, 1] = q[2]
+        out_q[i, 2] = q[3]
+        out_q[i, 3] = q[0]
+    if want & WANT_POS:
+        _write_vector(i, p0, p1, p2, out_p)
+    if want & WANT_OMEGA:
+        _write_vector(i, w0, w1, w2, out_w)
+    if want & WANT_ALPHA:
+        _write_vector(i, a0, a1, a2, out_wd)
+
+
+@jit
+def eval_split(s_all, nseg, dt, Rc, D, Mc, sp_all, nseg_p, dt_p, Pc, M, g, want,
                out_R, out_q, out_p, out_w, out_wd, out_v, out_a, out_f):
-    """Split spline: cumulative SO3 rotation, ordinary R3 position. Writes the wanted outputs."""
+    """Split spline: cumulative SO3 rotation on its grid (``s_all``, ``nseg``, ``dt``, ``Mc``),
+    ordinary R3 position on its own (``sp_all``, ``nseg_p``, ``dt_p``, ``M``). Writes the wanted
+    outputs."""
     k = Mc.shape[0]
+    kp = M.shape[0]
     inv_dt = 1.0 / dt
+    inv_dtp = 1.0 / dt_p
     b = np.empty(k)
     bd = np.empty(k)
     bdd = np.empty(k)
-    pb = np.empty(k)
-    pbd = np.empty(k)
-    pbdd = np.empty(k)
+    pb = np.empty(kp)
+    pbd = np.empty(kp)
+    pbdd = np.empty(kp)
     R = np.empty((3, 3))
     A = np.empty((3, 3))
     T = np.empty((3, 3))
@@ -104,7 +171,9 @@ def eval_split(s_all, nseg, dt, Rc, D, Pc, Mc, M, g, want,
     need_wd = (want & WANT_ALPHA) != 0
     for i in range(s_all.shape[0]):
         seg, u = _segment(s_all[i], nseg)
-        _basis_rows(Mc, M, u, inv_dt, b, bd, bdd, pb, pbd, pbdd)
+        basis_into(Mc, u, inv_dt, b, bd, bdd)
+        segp, up = _segment(sp_all[i], nseg_p)
+        basis_into(M, up, inv_dtp, pb, pbd, pbdd)
         # position and its derivatives
         p0 = 0.0
         p1 = 0.0
@@ -115,10 +184,10 @@ def eval_split(s_all, nseg, dt, Rc, D, Pc, Mc, M, g, want,
         c0 = 0.0
         c1 = 0.0
         c2 = 0.0
-        for j in range(k):
-            x0 = Pc[seg + j, 0]
-            x1 = Pc[seg + j, 1]
-            x2 = Pc[seg + j, 2]
+        for j in range(kp):
+            x0 = Pc[segp + j, 0]
+            x1 = Pc[segp + j, 1]
+            x2 = Pc[segp + j, 2]
             p0 += pb[j] * x0
             p1 += pb[j] * x1
             p2 += pb[j] * x2
@@ -155,79 +224,32 @@ def eval_split(s_all, nseg, dt, Rc, D, Pc, Mc, M, g, want,
                 continue
             so3_exp_into(b[j] * d0, b[j] * d1, b[j] * d2, A)
             if need_fvec:
-                y0 = A[0, 0] * f0 + A[1, 0] * f1 + A[2, 0] * f2
-                y1 = A[0, 1] * f0 + A[1, 1] * f1 + A[2, 1] * f2
-                f2 = A[0, 2] * f0 + A[1, 2] * f1 + A[2, 2] * f2
-                f0 = y0
-                f1 = y1
+                f0, f1, f2 = _transpose_times(A, f0, f1, f2)
             if need_rot:
-                for r in range(3):
-                    x0 = R[r, 0]
-                    x1 = R[r, 1]
-                    x2 = R[r, 2]
-                    T[r, 0] = x0 * A[0, 0] + x1 * A[1, 0] + x2 * A[2, 0]
-                    T[r, 1] = x0 * A[0, 1] + x1 * A[1, 1] + x2 * A[2, 1]
-                    T[r, 2] = x0 * A[0, 2] + x1 * A[1, 2] + x2 * A[2, 2]
-                for r in range(3):
-                    R[r, 0] = T[r, 0]
-                    R[r, 1] = T[r, 1]
-                    R[r, 2] = T[r, 2]
+                _times_right(R, A, T)
             if need_w:
                 # A^T w
-                r0 = A[0, 0] * w0 + A[1, 0] * w1 + A[2, 0] * w2
-                r1 = A[0, 1] * w0 + A[1, 1] * w1 + A[2, 1] * w2
-                r2 = A[0, 2] * w0 + A[1, 2] * w1 + A[2, 2] * w2
+                r0, r1, r2 = _transpose_times(A, w0, w1, w2)
                 e0 = bd[j] * d0
                 e1 = bd[j] * d1
                 e2 = bd[j] * d2
                 if need_wd:
-                    y0 = A[0, 0] * a0 + A[1, 0] * a1 + A[2, 0] * a2
-                    y1 = A[0, 1] * a0 + A[1, 1] * a1 + A[2, 1] * a2
-                    y2 = A[0, 2] * a0 + A[1, 2] * a1 + A[2, 2] * a2
+                    y0, y1, y2 = _transpose_times(A, a0, a1, a2)
                     a0 = y0 + bdd[j] * d0 + (r1 * e2 - r2 * e1)
                     a1 = y1 + bdd[j] * d1 + (r2 * e0 - r0 * e2)
                     a2 = y2 + bdd[j] * d2 + (r0 * e1 - r1 * e0)
                 w0 = r0 + e0
                 w1 = r1 + e1
                 w2 = r2 + e2
-        if want & WANT_ROT:
-            for r in range(3):
-                for c in range(3):
-                    out_R[i, r, c] = R[r, c]
-        if want & WANT_QUAT:
-            mat_to_quat_wxyz_into(R, q)
-            out_q[i, 0] = q[1]
-            out_q[i, 1] = q[2]
-            out_q[i, 2] = q[3]
-            out_q[i, 3] = q[0]
-        if want & WANT_POS:
-            out_p[i, 0] = p0
-            out_p[i, 1] = p1
-            out_p[i, 2] = p2
-        if want & WANT_OMEGA:
-            out_w[i, 0] = w0
-            out_w[i, 1] = w1
-            out_w[i, 2] = w2
-        if want & WANT_ALPHA:
-            out_wd[i, 0] = a0
-            out_wd[i, 1] = a1
-            out_wd[i, 2] = a2
+        _write_outputs(i, want, R, q, p0, p1, p2, w0, w1, w2, a0, a1, a2, out_R, out_q, out_p, out_w, out_wd)
         if want & WANT_VEL:
-            out_v[i, 0] = v0
-            out_v[i, 1] = v1
-            out_v[i, 2] = v2
+            _write_vector(i, v0, v1, v2, out_v)
         if want & WANT_ACC:
-            out_a[i, 0] = c0
-            out_a[i, 1] = c1
-            out_a[i, 2] = c2
+            _write_vector(i, c0, c1, c2, out_a)
         if want & WANT_FORCE:
             if need_rot:
-                f0 = R[0, 0] * h0 + R[1, 0] * h1 + R[2, 0] * h2
-                f1 = R[0, 1] * h0 + R[1, 1] * h1 + R[2, 1] * h2
-                f2 = R[0, 2] * h0 + R[1, 2] * h1 + R[2, 2] * h2
-            out_f[i, 0] = f0
-            out_f[i, 1] = f1
-            out_f[i, 2] = f2
+                f0, f1, f2 = _transpose_times(R, h0, h1, h2)
+            _write_vector(i, f0, f1, f2, out_f)
 
 
 @jit
@@ -242,9 +264,6 @@ def eval_se3(s_all, nseg, dt, Rc, D, Pc, Mc, M, g, want,
     b = np.empty(k)
     bd = np.empty(k)
     bdd = np.empty(k)
-    pb = np.empty(k)
-    pbd = np.empty(k)
-    pbdd = np.empty(k)
     R = np.empty((3, 3))
     A = np.empty((3, 3))
     J = np.empty((3, 3))
@@ -253,7 +272,7 @@ def eval_se3(s_all, nseg, dt, Rc, D, Pc, Mc, M, g, want,
     need_alpha = (want & (WANT_ALPHA | WANT_ACC | WANT_FORCE)) != 0
     for i in range(s_all.shape[0]):
         seg, u = _segment(s_all[i], nseg)
-        _basis_rows(Mc, M, u, inv_dt, b, bd, bdd, pb, pbd, pbdd)
+        basis_into(Mc, u, inv_dt, b, bd, bdd)
         for r in range(3):
             for c in range(3):
                 R[r, c] = Rc[seg, r, c]
@@ -282,27 +301,13 @@ def eval_se3(s_all, nseg, dt, Rc, D, Pc, Mc, M, g, want,
             p0 += R[0, 0] * t0 + R[0, 1] * t1 + R[0, 2] * t2
             p1 += R[1, 0] * t0 + R[1, 1] * t1 + R[1, 2] * t2
             p2 += R[2, 0] * t0 + R[2, 1] * t1 + R[2, 2] * t2
-            for r in range(3):
-                x0 = R[r, 0]
-                x1 = R[r, 1]
-                x2 = R[r, 2]
-                T[r, 0] = x0 * A[0, 0] + x1 * A[1, 0] + x2 * A[2, 0]
-                T[r, 1] = x0 * A[0, 1] + x1 * A[1, 1] + x2 * A[2, 1]
-                T[r, 2] = x0 * A[0, 2] + x1 * A[1, 2] + x2 * A[2, 2]
-            for r in range(3):
-                R[r, 0] = T[r, 0]
-                R[r, 1] = T[r, 1]
-                R[r, 2] = T[r, 2]
+            _times_right(R, A, T)
             # Ad_{A^-1} xi = [A^T (v - t x w), A^T w]
             x0 = v0 - (t1 * w2 - t2 * w1)
             x1 = v1 - (t2 * w0 - t0 * w2)
             x2 = v2 - (t0 * w1 - t1 * w0)
-            zv0 = A[0, 0] * x0 + A[1, 0] * x1 + A[2, 0] * x2
-            zv1 = A[0, 1] * x0 + A[1, 1] * x1 + A[2, 1] * x2
-            zv2 = A[0, 2] * x0 + A[1, 2] * x1 + A[2, 2] * x2
-            zw0 = A[0, 0] * w0 + A[1, 0] * w1 + A[2, 0] * w2
-            zw1 = A[0, 1] * w0 + A[1, 1] * w1 + A[2, 1] * w2
-            zw2 = A[0, 2] * w0 + A[1, 2] * w1 + A[2, 2] * w2
+            zv0, zv1, zv2 = _transpose_times(A, x0, x1, x2)
+            zw0, zw1, zw2 = _transpose_times(A, w0, w1, w2)
             bdj = bd[j]
             er0 = bdj * D[seg + j, 0]
             er1 = bdj * D[seg + j, 1]
@@ -314,12 +319,8 @@ def eval_se3(s_all, nseg, dt, Rc, D, Pc, Mc, M, g, want,
                 x0 = dv0 - (t1 * dw2 - t2 * dw1)
                 x1 = dv1 - (t2 * dw0 - t0 * dw2)
                 x2 = dv2 - (t0 * dw1 - t1 * dw0)
-                yv0 = A[0, 0] * x0 + A[1, 0] * x1 + A[2, 0] * x2
-                yv1 = A[0, 1] * x0 + A[1, 1] * x1 + A[2, 1] * x2
-                yv2 = A[0, 2] * x0 + A[1, 2] * x1 + A[2, 2] * x2
-                yw0 = A[0, 0] * dw0 + A[1, 0] * dw1 + A[2, 0] * dw2
-                yw1 = A[0, 1] * dw0 + A[1, 1] * dw1 + A[2, 1] * dw2
-                yw2 = A[0, 2] * dw0 + A[1, 2] * dw1 + A[2, 2] * dw2
+                yv0, yv1, yv2 = _transpose_times(A, x0, x1, x2)
+                yw0, yw1, yw2 = _transpose_times(A, dw0, dw1, dw2)
                 bddj = bdd[j]
                 # ad(z) e = [zw x er + zv x ew, zw x ew]
                 dv0 = yv0 + bddj * D[seg + j, 0] + (zw1 * er2 - zw2 * er1) + (zv1 * ew2 - zv2 * ew1)
@@ -335,42 +336,18 @@ def eval_se3(s_all, nseg, dt, Rc, D, Pc, Mc, M, g, want,
             w1 = zw1 + ew1
             w2 = zw2 + ew2
         # world velocity R v_b; world acceleration R (w x v + dv)
-        if want & WANT_ROT:
-            for r in range(3):
-                for c in range(3):
-                    out_R[i, r, c] = R[r, c]
-        if want & WANT_QUAT:
-            mat_to_quat_wxyz_into(R, q)
-            out_q[i, 0] = q[1]
-            out_q[i, 1] = q[2]
-            out_q[i, 2] = q[3]
-            out_q[i, 3] = q[0]
-        if want & WANT_POS:
-            out_p[i, 0] = p0
-            out_p[i, 1] = p1
-            out_p[i, 2] = p2
-        if want & WANT_OMEGA:
-            out_w[i, 0] = w0
-            out_w[i, 1] = w1
-            out_w[i, 2] = w2
-        if want & WANT_ALPHA:
-            out_wd[i, 0] = dw0
-            out_wd[i, 1] = dw1
-            out_wd[i, 2] = dw2
+        _write_outputs(i, want, R, q, p0, p1, p2, w0, w1, w2, dw0, dw1, dw2, out_R, out_q, out_p, out_w, out_wd)
         if want & WANT_VEL:
-            out_v[i, 0] = R[0, 0] * v0 + R[0, 1] * v1 + R[0, 2] * v2
-            out_v[i, 1] = R[1, 0] * v0 + R[1, 1] * v1 + R[1, 2] * v2
-            out_v[i, 2] = R[2, 0] * v0 + R[2, 1] * v1 + R[2, 2] * v2
+            x0, x1, x2 = _times(R, v0, v1, v2)
+            _write_vector(i, x0, x1, x2, out_v)
         if want & (WANT_ACC | WANT_FORCE):
             ab0 = (w1 * v2 - w2 * v1) + dv0
             ab1 = (w2 * v0 - w0 * v2) + dv1
             ab2 = (w0 * v1 - w1 * v0) + dv2
             if want & WANT_ACC:
-                out_a[i, 0] = R[0, 0] * ab0 + R[0, 1] * ab1 + R[0, 2] * ab2
-                out_a[i, 1] = R[1, 0] * ab0 + R[1, 1] * ab1 + R[1, 2] * ab2
-                out_a[i, 2] = R[2, 0] * ab0 + R[2, 1] * ab1 + R[2, 2] * ab2
+                x0, x1, x2 = _times(R, ab0, ab1, ab2)
+                _write_vector(i, x0, x1, x2, out_a)
             if want & WANT_FORCE:
                 # f_b = R^T (a_w - g) = a_b - R^T g
-                out_f[i, 0] = ab0 - (R[0, 0] * g[0] + R[1, 0] * g[1] + R[2, 0] * g[2])
-                out_f[i, 1] = ab1 - (R[0, 1] * g[0] + R[1, 1] * g[1] + R[2, 1] * g[2])
-                out_f[i, 2] = ab2 - (R[0, 2] * g[0] + R[1, 2] * g[1] + R[2, 2] * g[2])
+                y0, y1, y2 = _transpose_times(R, g[0], g[1], g[2])
+                _write_vector(i, ab0 - y0, ab1 - y1, ab2 - y2, out_f)

@@ -42,11 +42,11 @@ from .._jit import jit
 #: within 5% of each other).
 BLOCK = 256
 
-#: Columns of the per-knot table built by :func:`split_imu_knots`: one 64-byte row per knot.
+#: Columns of the per-knot table of the rotation grid built by :func:`split_imu_knots`: one
+#: 32-byte row per knot. The position grid is read from the control positions directly.
 KNOT_D = 0  # 3 entries: D_m = Log(R_{m-1}^T R_m) (zero for m = 0)
 KNOT_ANGLE = 3  # |D_m|
-KNOT_P = 4  # 3 entries: control position P_m
-KNOT_COLS = 8
+KNOT_COLS = 4
 
 # Taylor coefficients of sin(h)/h and cos(h) in x = h^2, highest power first; for |h| <= pi/2
 # the first omitted terms are (pi/2)^22/23! < 1e-18 and (pi/2)^22/22! < 2e-17.
@@ -55,30 +55,29 @@ _COS = tuple((-1.0) ** n / math.factorial(2 * n) for n in range(10, -1, -1))
 SN10, SN9, SN8, SN7, SN6, SN5, SN4, SN3, SN2, SN1, SN0 = _SIN
 CS10, CS9, CS8, CS7, CS6, CS5, CS4, CS3, CS2, CS1, CS0 = _COS
 
-# Rows of the scratch array of imu_split: the power u^n is row _PW + n (n = 1 .. k-1), the
-# plain basis' second time derivative B_j''(u) row _PW + k + j (j = 0 .. k-1).
+# Rows of the scratch array of imu_split: on the rotation grid the power u^n is row _PW + n
+# (n = 1 .. k-1); on the position grid (order kp, from row _PP = _PW + k) the power is row
+# _PP + n (n = 1 .. kp-1) and the plain basis' second time derivative B_j''(u) row _PP + kp + j.
 _B, _BD, _BDD, _W0, _W1, _W2, _F0, _F1, _F2, _D0, _D1, _D2, _ANG = range(13)
 _PW = 12
 _U = _PW + 1
-_U8 = np.uint64(KNOT_COLS)  # unsigned indices: numba checks signed ones for wraparound
+_U4 = np.uint64(KNOT_COLS)  # unsigned indices: numba checks signed ones for wraparound
+_U3 = np.uint64(3)
 _U9 = np.uint64(9)
 
 
-def split_imu_knots(increments, positions):
-    """Per-knot table (n, :data:`KNOT_COLS`) of :func:`imu_split`.
+def split_imu_knots(increments):
+    """Per-knot table (n, :data:`KNOT_COLS`) of the rotation grid for :func:`imu_split`.
 
     Parameters
     ----------
     increments : (n, 3) array
         ``D_m = Log(R_{m-1}^T R_m)`` (row 0 unused), as held by the spline.
-    positions : (n, 3) array
-        Control positions ``P_m``.
     """
     n = increments.shape[0]
     K = np.zeros((n, KNOT_COLS))
     K[:, KNOT_D:KNOT_D + 3] = increments
     K[:, KNOT_ANGLE] = np.sqrt(np.einsum("ni,ni->n", increments, increments))
-    K[:, KNOT_P:KNOT_P + 3] = positions
     return K
 
 
@@ -124,85 +123,103 @@ def _rotate_back(v0, v1, v2, d0, d1, d2, ct, al, be):
 
 
 @jit
-def imu_split(t, t0, dt, nseg, Rc, K, Mc, M, g, out):
+def _segments(t, start, m, t0, dt, top, seg, S, row):
+    """Segment index (clamped to [0, top], as eval_split) and local parameter u into ``S[row]``."""
+    for i in range(m):
+        s = (t[start + i] - t0) / dt
+        sg = int(math.floor(s))
+        sg = 0 if sg < 0 else sg
+        sg = top if sg > top else sg
+        seg[i] = np.uint64(sg)
+        S[row, i] = s - sg
+
+
+@jit
+def imu_split(t, t0, dt, nseg, Rc, K, Mc, t0_p, dt_p, nseg_p, Pc, M, g, out):
     """Gyro ``out[0]`` (N, 3) and specific force ``out[1]`` (N, 3) of a split spline at ``t`` (N,).
 
-    ``t`` in seconds, already range-checked; ``s = (t - t0) / dt`` picks segment
-    ``clamp(floor(s), 0, nseg - 1)`` as in ``eval_split``. ``Rc`` (n, 3, 3) control rotations,
-    ``K`` from :func:`split_imu_knots`, ``Mc`` and ``M`` the cumulative and plain blending
-    matrices (k, k), ``g`` gravity (3,); ``out`` (2, N, 3) C-contiguous.
+    ``t`` in seconds, already range-checked. Rotation grid: ``s = (t - t0) / dt`` picks segment
+    ``clamp(floor(s), 0, nseg - 1)`` as in ``eval_split``; ``Rc`` (n, 3, 3) control rotations,
+    ``K`` from :func:`split_imu_knots`, ``Mc`` the cumulative blending matrix (k, k). Position
+    grid: ``t0_p``, ``dt_p``, ``nseg_p``, control positions ``Pc`` (n_p, 3), plain blending
+    matrix ``M`` (kp, kp). ``g`` gravity (3,); ``out`` (2, N, 3) C-contiguous.
     """
     k = Mc.shape[0]
+    kp = M.shape[0]
     N = t.shape[0]
     inv_dt = 1.0 / dt
+    inv_dtp = 1.0 / dt_p
     g0 = g[0]
     g1 = g[1]
     g2 = g[2]
     B = BLOCK
     seg = np.empty(B, dtype=np.uint64)
+    segp = np.empty(B, dtype=np.uint64)
     # flat views indexed by unsigned integers: no wraparound checks, constant strides
     Kf = K.reshape(K.size)
     Rf = Rc.reshape(Rc.size)
+    Pf = Pc.reshape(Pc.size)
     of = out.reshape(out.size)
-    Q = _PW + k
+    PP = _PW + k
+    Q = PP + kp
     # One scratch array with constant row offsets, so that LLVM sees that the rows do not
     # overlap and vectorizes without runtime alias checks (separate arrays need a check per
     # pair, beyond its limit). A loop that reads an argument array through seg (a gather)
     # and writes anything is not vectorized: the bounds of the gather are unknown, so LLVM
     # cannot rule out that it overlaps the writes. Those loops only gather and stay scalar.
-    S = np.empty((_PW + 2 * k, B))
-    top = nseg - 1
+    S = np.empty((Q + kp, B))
     for start in range(0, N, B):
         m = min(B, N - start)
-        # segment and local parameter, clamped as in eval_split
-        for i in range(m):
-            s = (t[start + i] - t0) / dt
-            sg = int(math.floor(s))
-            sg = 0 if sg < 0 else sg
-            sg = top if sg > top else sg
-            seg[i] = np.uint64(sg)
-            S[_U, i] = s - sg
+        # segments and local parameters of both grids, clamped as in eval_split
+        _segments(t, start, m, t0, dt, nseg - 1, seg, S, _U)
+        _segments(t, start, m, t0_p, dt_p, nseg_p - 1, segp, S, PP + 1)
         # powers u^n, as eval_split's running product
         for n in range(2, k):
             for i in range(m):
                 S[_PW + n, i] = S[_PW + n - 1, i] * S[_U, i]
+        for n in range(2, kp):
+            for i in range(m):
+                S[PP + n, i] = S[PP + n - 1, i] * S[PP + 1, i]
         # B_j''(u) / dt^2, as eval_split: 0 + 2 M_j2 + M_j3 (6 u) + ..., same order
-        for j in range(k):
-            m2 = 2.0 * M[j, 2] if k > 2 else 0.0
+        for j in range(kp):
+            m2 = 2.0 * M[j, 2] if kp > 2 else 0.0
             for i in range(m):
                 S[_BDD, i] = 0.0 + m2
-            for n in range(3, k):
+            for n in range(3, kp):
                 cn = M[j, n]
                 fn = float(n * (n - 1))
                 for i in range(m):
-                    S[_BDD, i] += cn * (fn * S[_PW + n - 2, i])
+                    S[_BDD, i] += cn * (fn * S[PP + n - 2, i])
             for i in range(m):
-                S[Q + j, i] = (S[_BDD, i] * inv_dt) * inv_dt
+                S[Q + j, i] = (S[_BDD, i] * inv_dtp) * inv_dtp
         # world acceleration a = sum_j B_j'' P_{seg+j} (eval_split's order), f = R_seg^T (a - g)
         for i in range(m):
-            r = seg[i]
             c0 = 0.0
             c1 = 0.0
             c2 = 0.0
-            rp = r * _U8 + np.uint64(KNOT_P)
-            for j in range(k):
+            rp = segp[i] * _U3
+            for j in range(kp):
                 e = S[Q + j, i]
-                c0 += e * Kf[rp]
-                c1 += e * Kf[rp + np.uint64(1)]
-                c2 += e * Kf[rp + np.uint64(2)]
-                rp += _U8
+                c0 += e * Pf[rp]
+                c1 += e * Pf[rp + np.uint64(1)]
+                c2 += e * Pf[rp + np.uint64(2)]
+                rp += _U3
             h0 = c0 - g0
             h1 = c1 - g1
             h2 = c2 - g2
-            r9 = r * _U9
+            r9 = seg[i] * _U9
             S[_F0, i] = Rf[r9] * h0 + Rf[r9 + np.uint64(3)] * h1 + Rf[r9 + np.uint64(6)] * h2
             S[_F1, i] = Rf[r9 + np.uint64(1)] * h0 + Rf[r9 + np.uint64(4)] * h1 + Rf[r9 + np.uint64(7)] * h2
             S[_F2, i] = Rf[r9 + np.uint64(2)] * h0 + Rf[r9 + np.uint64(5)] * h1 + Rf[r9 + np.uint64(8)] * h2
         # w and f through the steps A_j^T, j = 1 .. k-1
+        for i in range(m):
+            S[_W0, i] = 0.0
+            S[_W1, i] = 0.0
+            S[_W2, i] = 0.0
         for j in range(1, k):
             off = np.uint64(KNOT_COLS * j)
             for i in range(m):
-                r = seg[i] * _U8 + off  # KNOT_D .. KNOT_ANGLE
+                r = seg[i] * _U4 + off  # KNOT_D .. KNOT_ANGLE
                 S[_D0, i] = Kf[r]
                 S[_D1, i] = Kf[r + np.uint64(1)]
                 S[_D2, i] = Kf[r + np.uint64(2)]
@@ -220,32 +237,19 @@ def imu_split(t, t0, dt, nseg, Rc, K, Mc, M, g, out):
                 for i in range(m):
                     S[_B, i] += cn * S[_PW + n, i]
                     S[_BD, i] += cn * (fn * S[_PW + n - 1, i])
-            if j == 1:
-                # w = 0 before the first step: A_1^T w = 0
-                for i in range(m):
-                    d0 = S[_D0, i]
-                    d1 = S[_D1, i]
-                    d2 = S[_D2, i]
-                    ct, al, be = _exp_coefficients(S[_B, i], S[_ANG, i])
-                    S[_F0, i], S[_F1, i], S[_F2, i] = _rotate_back(S[_F0, i], S[_F1, i], S[_F2, i], d0, d1, d2,
-                                                                   ct, al, be)
-                    bd = S[_BD, i] * inv_dt
-                    S[_W0, i] = bd * d0
-                    S[_W1, i] = bd * d1
-                    S[_W2, i] = bd * d2
-            else:
-                for i in range(m):
-                    d0 = S[_D0, i]
-                    d1 = S[_D1, i]
-                    d2 = S[_D2, i]
-                    ct, al, be = _exp_coefficients(S[_B, i], S[_ANG, i])
-                    S[_F0, i], S[_F1, i], S[_F2, i] = _rotate_back(S[_F0, i], S[_F1, i], S[_F2, i], d0, d1, d2,
-                                                                   ct, al, be)
-                    r0, r1, r2 = _rotate_back(S[_W0, i], S[_W1, i], S[_W2, i], d0, d1, d2, ct, al, be)
-                    bd = S[_BD, i] * inv_dt
-                    S[_W0, i] = r0 + bd * d0
-                    S[_W1, i] = r1 + bd * d1
-                    S[_W2, i] = r2 + bd * d2
+            for i in range(m):
+                d0 = S[_D0, i]
+                d1 = S[_D1, i]
+                d2 = S[_D2, i]
+                ct, al, be = _exp_coefficients(S[_B, i], S[_ANG, i])
+                S[_F0, i], S[_F1, i], S[_F2, i] = _rotate_back(S[_F0, i], S[_F1, i], S[_F2, i], d0, d1, d2,
+                                                               ct, al, be)
+                # w = 0 before the first step (set above), where A_1^T w adds exact zeros
+                r0, r1, r2 = _rotate_back(S[_W0, i], S[_W1, i], S[_W2, i], d0, d1, d2, ct, al, be)
+                bd = S[_BD, i] * inv_dt
+                S[_W0, i] = r0 + bd * d0
+                S[_W1, i] = r1 + bd * d1
+                S[_W2, i] = r2 + bd * d2
         # out[0, start + i], out[1, start + i]
         for i in range(m):
             o = np.uint64(3 * (start + i))

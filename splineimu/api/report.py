@@ -27,12 +27,18 @@ def poses_report(job, track, fit_report, gaps, max_gap_s) -> dict:
              "line": g.line} for g in gaps]},
         "rate_hz": None if job.imu.timestamps else job.imu.rate_hz,
         "timestamps_file": job.imu.timestamps,
+        "warnings": fit_warnings(fit_report),
     }
+
+
+def fit_warnings(fit_report) -> list:
+    """The fit's warnings as report.json lists them: ``{code, message, t_start_ns, t_end_ns}``."""
+    return list(fit_report.to_dict().get("warnings", []))
 
 
 def scene_report(scene, job) -> dict:
     """``source`` and ``rate_hz`` (and ``timestamps_file`` when given) of a scene job."""
-    rep = {"source": {"kind": "analytic scene", **scene.describe()}, "rate_hz": job.imu.rate_hz}
+    rep = {"source": {"kind": "analytic scene", **scene.describe()}, "rate_hz": job.imu.rate_hz, "warnings": []}
     if job.imu.timestamps:
         rep["rate_hz"] = None
         rep["timestamps_file"] = job.imu.timestamps

@@ -29,7 +29,7 @@ import numpy as np
 
 from ..errors import ConfigError, InputError
 from .options import PosesInput, SceneInput, SynthesisJob
-from .report import fit_lines, imu_line, poses_report, scene_report
+from .report import fit_lines, fit_warnings, imu_line, poses_report, scene_report
 
 #: --gaps split: pieces with fewer poses are skipped (a spline of order 6 needs a few knots of data)
 MIN_PIECE_POSES = 12
@@ -398,6 +398,8 @@ def _fit(job, track, log):
     spl, rep = fit(t_s, track.positions, track.quat_xyzw, kind=sp.kind, order=sp.order,
                    knot_spacing_s=sp.knot_spacing_s, **smooth, origin_ns=origin,
                    reject_outliers=not sp.keep_outliers, progress=track.t_ns.size > 100_000, return_report=True)
+    for w in fit_warnings(rep):  # also in report.json and in the fit summary
+        log.note(f"warning: {w['message']}")
     if rep.dropped_poses:
         lines = getattr(track, "line_numbers", None)
         where = [int(lines[i]) for i in rep.dropped_poses] if lines is not None else rep.dropped_poses

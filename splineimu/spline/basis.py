@@ -19,6 +19,8 @@ from math import comb, factorial
 
 import numpy as np
 
+from .._kernels import spline as _ks
+
 MIN_ORDER = 2
 MAX_ORDER = 8
 
@@ -66,14 +68,32 @@ def blending_matrix(order: int, cumulative: bool = False) -> np.ndarray:
 
 
 def basis_values(order: int, u, derivative: int = 0, cumulative: bool = False) -> np.ndarray:
-    """Basis (or cumulative basis) values and u-derivatives at ``u`` (N,) -> (N, order)."""
+    """Basis (or cumulative basis) values, or their ``derivative``-th u-derivative, at ``u`` (N,).
+
+    Evaluated by the kernels' own :func:`splineimu._kernels.spline.basis_into` (one
+    implementation for fitting, evaluation and this function).
+
+    Parameters
+    ----------
+    order : int
+    u : (N,) array_like
+        Segment parameters, normally in [0, 1).
+    derivative : {0, 1, 2}
+    cumulative : bool
+
+    Returns
+    -------
+    (N, order) ndarray
+
+    Examples
+    --------
+    >>> basis_values(4, [0.0]) * 6
+    array([[1., 4., 1., 0.]])
+    """
+    if derivative not in (0, 1, 2):
+        raise ValueError(f"derivative must be 0, 1 or 2, got {derivative}")
     M = blending_matrix(order, cumulative)
-    u = np.atleast_1d(np.asarray(u, dtype=np.float64))
-    k = M.shape[0]
-    P = np.zeros((u.size, k))
-    for n in range(derivative, k):
-        c = 1.0
-        for m in range(derivative):
-            c *= n - m
-        P[:, n] = c * u ** (n - derivative)
-    return P @ M.T
+    u = np.ascontiguousarray(np.atleast_1d(np.asarray(u, dtype=np.float64)).reshape(-1))
+    out = np.empty((3, u.size, M.shape[0]))
+    _ks.basis_table(M, u, 1.0, out)
+    return out[derivative]

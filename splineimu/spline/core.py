@@ -14,6 +14,20 @@ from .basis import MAX_ORDER, blending_matrix
 KINDS = ("split", "se3")
 
 
+def _check_order(order, name):
+    order = int(order)
+    if not (2 <= order <= MAX_ORDER):
+        raise SplineImuError(f"spline {name} must be in [2, {MAX_ORDER}], got {order}")
+    return order
+
+
+def _check_dt(dt_s, name):
+    dt_s = float(dt_s)
+    if not (np.isfinite(dt_s) and dt_s > 0):
+        raise SplineImuError(f"knot spacing {name} must be positive and finite, got {dt_s}")
+    return dt_s
+
+
 class Spline(MotionSource):
     r"""Cumulative uniform B-spline of order ``k`` on SE3 (``kind="se3"``) or R3 x SO3 (``"split"``).
 
@@ -24,7 +38,10 @@ class Spline(MotionSource):
       ``T(t) = T_i prod_{j=1}^{k-1} Exp(Btilde_j(u) Log(T_{i+j-1}^-1 T_{i+j}))``.
     - ``"split"``: the same cumulative product on SO3 for the rotation, and an ordinary
       B-spline ``p(t) = sum_j B_j(u) p_{i+j}`` for the position, so that translation and
-      rotation are decoupled and the world acceleration is the basis' second derivative.
+      rotation are decoupled and the world acceleration is the basis' second derivative. The
+      position may have its own grid (``position_t0_s``, ``position_dt_s``,
+      ``position_order``; its own ``u`` and segment), so that rotation and position are
+      smoothed independently; the valid range is then the intersection of both.
 
     ``B(u) = M [1, u, ..., u^(k-1)]`` with the blending matrix ``M`` of
     :func:`splineimu.spline.basis.blending_matrix`; ``Btilde`` uses the cumulative matrix.
@@ -50,40 +67,50 @@ class Spline(MotionSource):
     array([10.,  0.,  0.])
     """
 
-    def __init__(self, t0_s, dt_s, positions, rotations, kind="split", order=4, origin_ns=0):
+    def __init__(self, t0_s, dt_s, positions, rotations, kind="split", order=4, origin_ns=0, *,
+                 position_t0_s=None, position_dt_s=None, position_order=None):
         kind = str(kind).lower()
         if kind not in KINDS:
             raise SplineImuError(f"spline kind must be one of {KINDS}, got {kind!r}")
-        order = int(order)
-        if not (2 <= order <= MAX_ORDER):
-            raise SplineImuError(f"spline order must be in [2, {MAX_ORDER}], got {order}")
-        dt_s = float(dt_s)
-        if not (np.isfinite(dt_s) and dt_s > 0):
-            raise SplineImuError(f"knot spacing dt_s must be positive and finite, got {dt_s}")
+        order = _check_order(order, "order")
+        dt_s = _check_dt(dt_s, "dt_s")
+        separate = not (position_t0_s is None and position_dt_s is None and position_order is None)
+        if separate and kind != "split":
+            raise SplineImuError("a separate position grid needs kind='split'")
+        p_order = order if position_order is None else _check_order(position_order, "position_order")
+        p_dt = dt_s if position_dt_s is None else _check_dt(position_dt_s, "position_dt_s")
+        p_t0 = float(t0_s) if position_t0_s is None else float(position_t0_s)
         P = np.ascontiguousarray(np.asarray(positions, dtype=np.float64))
         R = np.ascontiguousarray(np.asarray(rotations, dtype=np.float64))
         if P.ndim != 2 or P.shape[1] != 3:
             raise SplineImuError(f"Expected `positions` to have shape (n, 3), got {P.shape}")
-        if R.shape != (P.shape[0], 3, 3):
-            raise SplineImuError(f"Expected rotations of shape ({P.shape[0]}, 3, 3), got {R.shape}")
-        if P.shape[0] < order:
-            raise SplineImuError(f"an order-{order} spline needs at least {order} control points, got {P.shape[0]}")
+        if R.ndim != 3 or R.shape[1:] != (3, 3) or (not separate and R.shape[0] != P.shape[0]):
+            want = "(n, 3, 3)" if separate else f"({P.shape[0]}, 3, 3)"
+            raise SplineImuError(f"Expected rotations of shape {want}, got {R.shape}")
+        if R.shape[0] < order:
+            raise SplineImuError(f"an order-{order} spline needs at least {order} control points, got {R.shape[0]}")
+        if P.shape[0] < p_order:
+            raise SplineImuError(f"an order-{p_order} spline needs at least {p_order} control points, got {P.shape[0]}")
         if not (np.all(np.isfinite(P)) and np.all(np.isfinite(R))):
             raise SplineImuError("control points contain NaN or inf")
         self.kind = kind
         self.order = order
         self.dt_s = dt_s
         self.t0_s = float(t0_s)
+        self.position_order = p_order
+        self.position_dt_s = p_dt
+        self.position_t0_s = p_t0
         self.origin_ns = int(origin_ns)
         self.control_positions = P
         self.control_rotations = R
-        self._M = blending_matrix(order)
+        self._M = blending_matrix(p_order)
         self._Mc = blending_matrix(order, cumulative=True)
         self._build_increments()
 
     # ----------------------------------------------------------------- construction
     @classmethod
-    def from_control_points(cls, t0_s, dt_s, positions, quat_xyzw, kind="split", order=4, origin_ns=0):
+    def from_control_points(cls, t0_s, dt_s, positions, quat_xyzw, kind="split", order=4, origin_ns=0, *,
+                            position_t0_s=None, position_dt_s=None, position_order=None):
         """Spline from control positions (n, 3) and quaternions ``quat_xyzw`` (n, 4).
 
         Quaternions are normalized; their signs do not matter (each increment between
@@ -102,6 +129,10 @@ class Spline(MotionSource):
             4 (cubic, default) to 8; 5 and 6 give smoother derivatives.
         origin_ns : int
             Integer time origin [ns] of the time base.
+        position_t0_s, position_dt_s, position_order : optional
+            Split splines only: the position grid's start, knot spacing and order, when they
+            differ from the rotation grid's (``t0_s``, ``dt_s``, ``order``); ``positions`` then
+            has its own length.
 
         Raises
         ------
@@ -111,11 +142,12 @@ class Spline(MotionSource):
         q = np.asarray(quat_xyzw, dtype=np.float64)
         if q.ndim != 2 or q.shape[1] != 4:
             raise SplineImuError(f"Expected `quat_xyzw` to have shape (n, 4), got {q.shape}")
-        return cls(t0_s, dt_s, positions, lie.quat_xyzw_to_matrix(q), kind, order, origin_ns)
+        return cls(t0_s, dt_s, positions, lie.quat_xyzw_to_matrix(q), kind, order, origin_ns,
+                   position_t0_s=position_t0_s, position_dt_s=position_dt_s, position_order=position_order)
 
     def _build_increments(self):
-        n = self.n_control
         R = self.control_rotations
+        n = R.shape[0]
         rel_R = np.matmul(np.swapaxes(R[:-1], 1, 2), R[1:])
         if self.kind == "split":
             D = np.zeros((n, 3))
@@ -136,27 +168,37 @@ class Spline(MotionSource):
     # ------------------------------------------------------------------- properties
     @property
     def n_control(self) -> int:
-        return int(self.control_positions.shape[0])
+        """Number of control rotations (and positions, unless the position grid is separate)."""
+        return int(self.control_rotations.shape[0])
 
     @property
     def n_segments(self) -> int:
         return self.n_control - self.order + 1
 
     @property
+    def n_position_segments(self) -> int:
+        return int(self.control_positions.shape[0]) - self.position_order + 1
+
+    @property
     def t_min_s(self) -> float:
-        return self.t0_s
+        return max(self.t0_s, self.position_t0_s)
 
     @property
     def t_max_s(self) -> float:
-        return self.t0_s + self.n_segments * self.dt_s
+        return min(self.t0_s + self.n_segments * self.dt_s,
+                   self.position_t0_s + self.n_position_segments * self.position_dt_s)
 
     @property
     def control_quat_xyzw(self) -> np.ndarray:
         return lie.matrix_to_quat_xyzw(self.control_rotations)
 
     def __repr__(self):
+        grid = ""
+        if (self.position_dt_s, self.position_order, self.position_t0_s) != (self.dt_s, self.order, self.t0_s):
+            grid = (f", position_order={self.position_order}, n_position_control={self.control_positions.shape[0]}, "
+                    f"position_dt_s={self.position_dt_s:g}")
         return (f"Spline(kind={self.kind!r}, order={self.order}, n_control={self.n_control}, "
-                f"dt_s={self.dt_s:g}, range=[{self.t_min_s:.6f}, {self.t_max_s:.6f}] s)")
+                f"dt_s={self.dt_s:g}{grid}, range=[{self.t_min_s:.6f}, {self.t_max_s:.6f}] s)")
 
     # ------------------------------------------------------------------- evaluation
     def _evaluate(self, t_s, want, gravity=DEFAULT_GRAVITY):
@@ -173,10 +215,16 @@ class Spline(MotionSource):
             w=buf(_k.WANT_OMEGA, (3,)), wd=buf(_k.WANT_ALPHA, (3,)), v=buf(_k.WANT_VEL, (3,)),
             a=buf(_k.WANT_ACC, (3,)), f=buf(_k.WANT_FORCE, (3,)),
         )
-        kernel = _k.eval_split if self.kind == "split" else _k.eval_se3
-        kernel(s, self.n_segments, self.dt_s, self.control_rotations, self._D, self.control_positions,
-               self._Mc, self._M, g, int(want),
-               out["R"], out["q"], out["p"], out["w"], out["wd"], out["v"], out["a"], out["f"])
+        outs = (out["R"], out["q"], out["p"], out["w"], out["wd"], out["v"], out["a"], out["f"])
+        if self.kind == "split":
+            sp = s if self.position_t0_s == self.t0_s and self.position_dt_s == self.dt_s else \
+                (t - self.position_t0_s) / self.position_dt_s
+            _k.eval_split(s, self.n_segments, self.dt_s, self.control_rotations, self._D, self._Mc,
+                          sp, self.n_position_segments, self.position_dt_s, self.control_positions, self._M,
+                          g, int(want), *outs)
+        else:
+            _k.eval_se3(s, self.n_segments, self.dt_s, self.control_rotations, self._D, self.control_positions,
+                        self._Mc, self._M, g, int(want), *outs)
         out["t"] = t
         return out
 
@@ -230,12 +278,13 @@ class Spline(MotionSource):
         t = self.check_times(t_s)
         g = np.ascontiguousarray(np.asarray(gravity, dtype=np.float64).reshape(3))
         if self._imu_knots is None:
-            self._imu_knots = _ki.split_imu_knots(self._D, self.control_positions)
+            self._imu_knots = _ki.split_imu_knots(self._D)
         # one allocation for both outputs: depending on its state, glibc maps large blocks
         # afresh and unmaps them on free, so that a call page-faults its outputs in (measured at
         # N = 1e5: up to 20 of 40 ns per sample with two blocks); a single block was not hit
         # (from 4 MB numpy asks for huge pages)
         out = np.empty((2, t.shape[0], 3))
-        _ki.imu_split(t, self.t0_s, self.dt_s, self.n_segments, self.control_rotations, self._imu_knots,
-                      self._Mc, self._M, g, out)
+        _ki.imu_split(t, self.t0_s, self.dt_s, self.n_segments, self.control_rotations, self._imu_knots, self._Mc,
+                      self.position_t0_s, self.position_dt_s, self.n_position_segments, self.control_positions,
+                      self._M, g, out)
         return out[0], out[1]

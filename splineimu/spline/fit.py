@@ -20,77 +20,29 @@ well-posed and bridges them smoothly.
 from __future__ import annotations
 
 import time
-from dataclasses import asdict, dataclass, field
 
 import numpy as np
-from scipy.linalg import solveh_banded
 
 from .. import lie
 from .._kernels import fit as _kf
-from ..errors import SplineImuError
+from ..errors import InputError, SplineImuError
+from .banded import (
+    DEFAULT_SMOOTHNESS,
+    SPARSE_SMOOTHNESS,
+    add_position_penalty,
+    layout,
+    row_weights,
+    solve_banded_blocks,
+    solve_banded_scalar,
+)
 from .basis import blending_matrix
+from .checks import check_rotation_steps, classify_residuals, dropped_warning
 from .core import KINDS, Spline
+from .knots import choose_knot_spacing, prediction_warnings, rotation_signal
+from .report import FitReport
 
 #: Gauss-Newton stops when the largest update is below this (rad, or m for SE3 translation)
 GN_STEP_TOL = 1e-9
-#: Outliers: beyond this many robust sigmas and these absolute floors (m, rad)
-OUTLIER_SIGMAS = 8.0
-OUTLIER_FLOOR_M = 2e-3
-OUTLIER_FLOOR_RAD = 2e-3
-#: Relative weight of the default smoothness penalty where data are dense (negligible bias).
-DEFAULT_SMOOTHNESS = 1e-10
-#: Relative penalty weight on control points with little data in their support (gaps, sparse
-#: stretches): there the curve is the smoothest bridge, instead of being steered by the noise of
-#: the few poses at the gap's borders.
-SPARSE_SMOOTHNESS = 1e-3
-
-
-@dataclass
-class FitReport:
-    """What a fit did: layout, residuals and solver statistics (SI units)."""
-
-    kind: str
-    order: int
-    knot_spacing_s: float
-    knot_spacing_source: str
-    n_poses: int
-    n_control: int
-    span_s: tuple
-    residual_position_rms_m: float
-    residual_position_max_m: float
-    residual_angle_rms_rad: float
-    residual_angle_max_rad: float
-    iterations: int
-    converged: bool
-    time_s: float
-    smoothness: float
-    dropped_poses: list = field(default_factory=list)
-    knot_choice: dict | None = None
-    sparse_control_points: int = 0
-    notes: list = field(default_factory=list)
-
-    def to_dict(self) -> dict:
-        d = asdict(self)
-        d["span_s"] = list(self.span_s)
-        return d
-
-    def summary(self) -> str:
-        lines = [
-            f"spline        {self.kind}, order {self.order}, knot spacing {self.knot_spacing_s * 1e3:.3f} ms "
-            f"({self.knot_spacing_source}), {self.n_control} control poses",
-            f"fit residual  position rms {self.residual_position_rms_m * 1e3:.4f} mm "
-            f"(max {self.residual_position_max_m * 1e3:.4f} mm), angle rms "
-            f"{np.degrees(self.residual_angle_rms_rad):.5f} deg "
-            f"(max {np.degrees(self.residual_angle_max_rad):.5f} deg)",
-        ]
-        kc = self.knot_choice
-        if kc and kc.get("predicted_gyro_rms_rad_s") is not None:
-            lines.append(
-                f"predicted     gyro error ~{kc['predicted_gyro_rms_rad_s']:.2e} rad/s, accel error "
-                f"~{kc['predicted_accel_rms_m_s2']:.2e} m/s^2 (pose noise ~{kc['position_noise_m'] * 1e3:.3f} mm, "
-                f"~{np.degrees(kc['angle_noise_rad']):.4f} deg)"
-            )
-        return "\n".join(lines)
 
 
 def _validate(t_s, positions, quat_xyzw, weights):
@@ -98,30 +50,22 @@ def _validate(t_s, positions, quat_xyzw, weights):
     P = np.ascontiguousarray(np.asarray(positions, dtype=np.float64))
     q = np.asarray(quat_xyzw, dtype=np.float64)
     if P.shape != (t.size, 3):
-        raise SplineImuError(f"Expected `positions` to have shape ({t.size}, 3), got {P.shape}")
+        raise InputError(f"Expected `positions` to have shape ({t.size}, 3), got {P.shape}")
     if q.shape != (t.size, 4):
-        raise SplineImuError(f"Expected `quat_xyzw` to have shape ({t.size}, 4), got {q.shape}")
+        raise InputError(f"Expected `quat_xyzw` to have shape ({t.size}, 4), got {q.shape}")
     if not (np.all(np.isfinite(t)) and np.all(np.isfinite(P)) and np.all(np.isfinite(q))):
-        raise SplineImuError("poses contain NaN or inf")
+        raise InputError("poses contain NaN or inf")
     if t.size > 1 and np.any(np.diff(t) <= 0):
         i = int(np.flatnonzero(np.diff(t) <= 0)[0])
-        raise SplineImuError(f"timestamps must be strictly increasing (pose {i + 1} at {t[i + 1]!r} s)")
+        raise InputError(f"timestamps must be strictly increasing (pose {i + 1} at {t[i + 1]!r} s)")
     R = lie.quat_xyzw_to_matrix(q)
     if weights is None:
         w = np.ones(t.size)
     else:
         w = np.ascontiguousarray(np.asarray(weights, dtype=np.float64).reshape(-1))
         if w.shape != t.shape or np.any(~np.isfinite(w)) or np.any(w < 0):
-            raise SplineImuError("`weights` must be (N,) finite and non-negative")
+            raise InputError("`weights` must be (N,) finite and non-negative")
     return t, P, R, w
-
-
-def layout(t_first, t_last, knot_spacing_s, order):
-    """Knot layout covering [t_first, t_last] exactly: (t0, dt, n_segments, n_control)."""
-    span = float(t_last - t_first)
-    nseg = max(1, int(round(span / float(knot_spacing_s))))
-    dt = span / nseg if span > 0 else float(knot_spacing_s)
-    return float(t_first), dt, nseg, nseg + order - 1
 
 
 def _control_times(t0, dt, n, order):
@@ -134,48 +78,6 @@ def _interp_rotations(t, R, tq):
 
     tq = np.clip(tq, t[0], t[-1])
     return Slerp(t, Rotation.from_matrix(R))(tq).as_matrix()
-
-
-def _solve_banded_blocks(H, rhs, damping=0.0):
-    """Solve the symmetric block-banded system (upper blocks H (n, k, d, d)) for rhs (n*d, ...)."""
-    n, k, d, _ = H.shape
-    if damping:
-        H = H.copy()
-        idx = np.arange(d)
-        H[:, 0, idx, idx] += damping * np.maximum(H[:, 0, idx, idx], 1e-12)
-    ab = np.zeros((k * d, n * d))
-    _kf.blocks_to_lapack_upper(np.ascontiguousarray(H), ab)
-    return solveh_banded(ab, rhs, lower=False, check_finite=False)
-
-
-def _difference_matrix_band(n, order_diff):
-    """Coefficients of the order-r difference operator: row j touches j .. j + r."""
-    c = np.array([1.0])
-    for _ in range(order_diff):
-        c = np.convolve(c, [-1.0, 1.0])
-    return c  # length r + 1
-
-
-def _add_position_penalty(Hs, mu, r):
-    """Add D_r^T diag(mu) D_r to scalar banded blocks Hs (n, k); mu scalar or per row (n - r,)."""
-    n, k = Hs.shape
-    c = _difference_matrix_band(n, r)
-    L = c.size
-    if L > k or n < L:
-        return
-    mu = np.broadcast_to(np.asarray(mu, dtype=np.float64), (n - L + 1,))
-    for a in range(L):
-        for b in range(a, L):
-            Hs[a: n - L + 1 + a, b - a] += mu * c[a] * c[b]
-
-
-def _row_weights(sparse, width):
-    """Per penalty row touching controls j .. j + width - 1: True where any of them is sparse."""
-    n = sparse.size
-    if n < width:
-        return np.zeros(0, dtype=bool)
-    win = np.lib.stride_tricks.sliding_window_view(sparse, width)
-    return win.any(axis=1)
 
 
 def _rotation_penalty(D, tangent_dim, mu, H, g, jac_inv):
@@ -251,7 +153,7 @@ class _Problem:
         self.n_sparse = int(self.sparse.sum())
 
     def _mu(self, width):
-        rows = _row_weights(self.sparse, width)
+        rows = row_weights(self.sparse, width)
         return np.where(rows, SPARSE_SMOOTHNESS, self.smoothness) * self.data_per_ctrl
 
     # ------------------------------------------------------------------ position (split)
@@ -260,13 +162,11 @@ class _Problem:
         Hs = np.zeros((n, k))
         rhs = np.zeros((n, 3))
         w = self.w * self.w_pos
-        _kf.position_normal_equations(self.s, w, self.P, self.M, self.nseg, Hs, rhs)
+        _kf.fold_normal_equations(self.s, w, np.zeros(self.t.size, dtype=np.int64), self.P, self.M, self.nseg,
+                                  Hs[None], rhs[None])
         r = min(3, k - 1)
-        _add_position_penalty(Hs, self._mu(r + 1) * self.w_pos, r)
-        ab = np.zeros((k, n))
-        for c in range(k):
-            ab[k - 1 - c, c:] = Hs[: n - c, c]
-        return solveh_banded(ab, rhs, lower=False, check_finite=False)
+        add_position_penalty(Hs, self._mu(r + 1) * self.w_pos, r)
+        return solve_banded_scalar(Hs, rhs)
 
     def position_residuals(self, Pc):
         out = np.empty((self.t.size, 3))
@@ -309,7 +209,7 @@ class _Problem:
         it = 0
         converged = False
         for it in range(1, max_iter + 1):
-            delta = _solve_banded_blocks(H, -g.reshape(-1), damping=lam).reshape(g.shape)
+            delta = solve_banded_blocks(H, -g.reshape(-1), damping=lam).reshape(g.shape)
             step = float(np.abs(delta).max())
             if se3:
                 T = lie.se3_exp(delta)
@@ -346,9 +246,26 @@ class _Problem:
         return (Rc, pc, res, it, converged) if se3 else (Rc, res, it, converged)
 
 
-def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="auto", *, weights=None,
-        smoothness=DEFAULT_SMOOTHNESS, origin_ns=0, max_iter=30, reject_outliers=True, progress=False,
-        return_report=False):
+def _resolve(value, name, kind_name):
+    """``"auto"`` or a positive number (spacing) / an integer (order)."""
+    if isinstance(value, str):
+        if value == "auto":
+            return "auto"
+        try:
+            value = float(value)
+        except ValueError:
+            raise SplineImuError(f"{name} must be a number or 'auto', got {value!r}") from None
+    if kind_name == "order":
+        return int(value)
+    value = float(value)
+    if not (np.isfinite(value) and value > 0):
+        raise SplineImuError(f"{name} must be positive, got {value!r}")
+    return value
+
+
+def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="auto", *, position_order=None,
+        position_knot_spacing_s=None, weights=None, smoothness=DEFAULT_SMOOTHNESS, origin_ns=0, max_iter=30,
+        reject_outliers=True, progress=False, return_report=False):
     """Least-squares B-spline through timestamped poses ``world_T_body``.
 
     Parameters
@@ -360,10 +277,14 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
         Any sign, not necessarily unit (normalized; a zero quaternion is an error).
     kind : {"split", "se3"}
     order : int or "auto"
-        Spline order (4 = cubic). ``"auto"`` (default) compares 4, 5 and 6 by their predicted
-        synthesis error and takes the best; an integer fixes it.
+        Spline order (4 = cubic) of the rotation (and, unless ``position_order`` is given, of
+        the position). ``"auto"`` (default) chooses among 4, 5 and 6 from the data.
     knot_spacing_s : float or "auto"
-        Knot spacing [s]; ``"auto"`` chooses it from the data (:mod:`splineimu.spline.knots`).
+        Knot spacing [s] of the rotation (and, unless ``position_knot_spacing_s`` is given, of
+        the position); ``"auto"`` chooses it from the data (:mod:`splineimu.spline.knots`),
+        for rotation and position independently.
+    position_order, position_knot_spacing_s : int / float / "auto", optional
+        The position grid's own settings (``kind="split"`` only).
     weights : (N,) array_like, optional
         Per-pose weights (0 drops a pose from the data term).
     smoothness : float
@@ -371,9 +292,9 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
     origin_ns : int
         Integer-nanosecond origin of the time base.
     reject_outliers : bool
-        After the first fit, drop poses whose residual exceeds 8 robust standard deviations
-        and 2 mm / 2 mrad (glitches of a tracking system) and fit again from that solution; the
-        report lists them (``dropped_poses``).
+        After the first fit, drop runs of poses that jump away from the motion and back
+        (tracking glitches, :mod:`splineimu.spline.checks`) and fit again; the report lists
+        them (``dropped_poses``) and warns.
     progress : bool
         Show a progress bar for long fits.
     return_report : bool
@@ -386,8 +307,11 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
 
     Raises
     ------
+    InputError
+        Bad shapes, unsorted or non-finite input, too few poses for the order, consecutive
+        poses rotating by more than 90 degrees.
     SplineImuError
-        Bad shapes, unsorted or non-finite input, too few poses for the order.
+        Bad settings.
 
     Examples
     --------
@@ -403,41 +327,34 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
     kind = str(kind).lower()
     if kind not in KINDS:
         raise SplineImuError(f"spline kind must be one of {KINDS}, got {kind!r}")
-    auto_order = isinstance(order, str)
-    if auto_order and order != "auto":
-        raise SplineImuError(f"order must be an integer or 'auto', got {order!r}")
-    if not auto_order:
-        order = int(order)
+    r_order = _resolve(order, "order", "order")
+    r_dt = _resolve(knot_spacing_s, "knot spacing", "dt")
+    p_order = r_order if position_order is None else _resolve(position_order, "position order", "order")
+    p_dt = r_dt if position_knot_spacing_s is None else _resolve(position_knot_spacing_s, "position knot spacing",
+                                                                   "dt")
+    if kind == "se3" and (position_order is not None or position_knot_spacing_s is not None):
+        raise SplineImuError("position_order and position_knot_spacing_s need kind='split'")
     t, P, R, w = _validate(t_s, positions, quat_xyzw, weights)
     if t.size < 2:
-        raise SplineImuError(f"too few poses to fit: got {t.size}, need at least 2")
-    knot_choice = None
-    if isinstance(knot_spacing_s, str) and knot_spacing_s != "auto":
-        try:
-            knot_spacing_s = float(knot_spacing_s)
-        except ValueError:
-            raise SplineImuError(f"knot spacing must be a number or 'auto', got {knot_spacing_s!r}") from None
-    if isinstance(knot_spacing_s, str) or auto_order:
-        from .knots import choose_knot_spacing
-
-        cands = None if isinstance(knot_spacing_s, str) else np.array([float(knot_spacing_s)])
-        knot_choice = choose_knot_spacing(t, P, R, order=order, candidates=cands)
-        order = int(knot_choice["order"])
-    if isinstance(knot_spacing_s, str):
-        dt_req = knot_choice["knot_spacing_s"]
-        source = "auto"
-    else:
-        dt_req = float(knot_spacing_s)
-        if not (np.isfinite(dt_req) and dt_req > 0):
-            raise SplineImuError(f"knot spacing must be positive, got {knot_spacing_s!r}")
-        source = "given"
-    t0, dt, nseg, n = layout(t[0], t[-1], dt_req, order)
-    if knot_choice is not None:
-        sig_p = max(knot_choice.get("position_noise_m", 0.0), 1e-6)
-        sig_r = max(knot_choice.get("angle_noise_rad", 0.0), 1e-6)
-    else:
-        sig_p, sig_r = 1e-3, 1e-3
-    prob = _Problem(t, P, R, w, order, t0, dt, nseg, float(smoothness), 1.0 / sig_r**2, 1.0 / sig_p**2)
+        raise InputError(f"too few poses to fit: got {t.size}, need at least 2")
+    gap_warnings = check_rotation_steps(t, R)
+    choice = None
+    if "auto" in (r_order, r_dt, p_order, p_dt):
+        choice = choose_knot_spacing(t, P, R, w, r_order, p_order, None if r_dt == "auto" else r_dt,
+                                     None if p_dt == "auto" else p_dt)
+        r_order, r_dt = choice["rotation"]["order"], choice["rotation"]["knot_spacing_s"]
+        p_order, p_dt = choice["position"]["order"], choice["position"]["knot_spacing_s"]
+    source = "auto" if isinstance(knot_spacing_s, str) else "given"
+    if kind == "se3":
+        # one grid: the finer spacing, the position's order (the accelerometer's)
+        r_dt = p_dt = min(r_dt, p_dt)
+        r_order = p_order = max(r_order, p_order)
+    sig_p = sig_r = 1e-3
+    if choice is not None:
+        sig_p = max(choice["position"]["cv_rms"] / np.sqrt(3.0), 1e-6)
+        sig_r = max(choice["rotation"]["cv_rms"] / np.sqrt(3.0), 1e-6)
+    lay_r = layout(t[0], t[-1], r_dt, r_order)
+    lay_p = layout(t[0], t[-1], p_dt, p_order)
 
     bar = None
     if progress:
@@ -449,79 +366,78 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
         if bar is not None:
             bar.update(1)
 
-    tc = _control_times(t0, dt, n, order)
-    Rc0 = _interp_rotations(t, R, tc)
-    dropped = []
+    def problems(wts):
+        args = (float(smoothness), 1.0 / sig_r**2, 1.0 / sig_p**2)
+        return (_Problem(t, P, R, wts, r_order, *lay_r[:3], *args),
+                _Problem(t, P, R, wts, p_order, *lay_p[:3], *args))
+
+    probs = problems(w)
+    Rc0 = _interp_rotations(t, R, _control_times(lay_r[0], lay_r[1], lay_r[3], r_order))
+    theta = rotation_signal(R)
+    dropped = np.zeros(t.size, dtype=bool)
+    warnings = []
     for attempt in range(2):
-        Rc, Pc, res_pos, res_rot, iters, conv = _solve(prob, Rc0, kind, max_iter, tick, smoothness, dt)
+        Rc, Pc, res_pos, res_rot, iters, conv = _solve(probs, Rc0, kind, max_iter, tick, smoothness)
+        if attempt == 1:
+            break
+        drop, warnings = classify_residuals(t, P, theta, res_pos, res_rot, probs[0].w)
+        if not (reject_outliers and drop.any()):
+            break
+        dropped = drop
+        w2 = w.copy()
+        w2[drop] = 0.0
+        probs = problems(w2)
         Rc0 = Rc
-        if not reject_outliers or attempt == 1:
-            break
-        bad = _outliers(res_pos, res_rot, prob.w)
-        if not bad.any():
-            break
-        dropped = np.flatnonzero(bad).tolist()
-        w2 = prob.w.copy()
-        w2[bad] = 0.0
-        prob = _Problem(t, P, R, w2, order, t0, dt, nseg, float(smoothness), prob.w_rot, prob.w_pos)
-    spl = Spline(t0, dt, Pc, Rc, kind, order, origin_ns)
+    if dropped.any():
+        # the residual bursts of the first fit that were glitches are gone; re-check the rest
+        _, warnings = classify_residuals(t, P, theta, res_pos, res_rot, probs[0].w)
+        warnings = dropped_warning(t, dropped) + warnings
+    if kind == "se3":
+        spl = Spline(lay_r[0], lay_r[1], Pc, Rc, kind, r_order, origin_ns)
+    else:
+        spl = Spline(lay_r[0], lay_r[1], Pc, Rc, kind, r_order, origin_ns, position_t0_s=lay_p[0],
+                     position_dt_s=lay_p[1], position_order=p_order)
     if bar is not None:
         bar.close()
-    keep = np.ones(t.size, dtype=bool)
-    keep[dropped] = False
+    keep = ~dropped
     ep = np.linalg.norm(res_pos[keep], axis=1)
     ea = np.linalg.norm(res_rot[keep], axis=1)
+    pred_g = choice["predicted_gyro_rms_rad_s"] if choice else None
+    pred_a = choice["predicted_accel_rms_m_s2"] if choice else None
+    warnings = prediction_warnings(choice, t) + gap_warnings + warnings
     report = FitReport(
-        kind=kind, order=order, knot_spacing_s=dt, knot_spacing_source=source, n_poses=int(t.size),
-        n_control=n, span_s=(float(t[0]), float(t[-1])),
+        kind=kind, order=r_order, knot_spacing_s=lay_r[1], knot_spacing_source=source, n_poses=int(t.size),
+        n_control=lay_r[3], span_s=(float(t[0]), float(t[-1])),
         residual_position_rms_m=float(np.sqrt(np.mean(ep**2))), residual_position_max_m=float(ep.max()),
         residual_angle_rms_rad=float(np.sqrt(np.mean(ea**2))), residual_angle_max_rad=float(ea.max()),
         iterations=iters, converged=bool(conv), time_s=time.perf_counter() - t0_wall,
-        smoothness=float(smoothness), dropped_poses=dropped, knot_choice=knot_choice,
-        sparse_control_points=prob.n_sparse,
+        smoothness=float(smoothness), position_order=p_order, position_knot_spacing_s=lay_p[1],
+        n_position_control=lay_p[3], predicted_gyro_rms_rad_s=pred_g, predicted_accel_rms_m_s2=pred_a,
+        dropped_poses=np.flatnonzero(dropped).tolist(), knot_choice=choice,
+        sparse_control_points=probs[0].n_sparse, warnings=warnings, origin_ns=int(origin_ns),
     )
     spl.fit_report = report
     return (spl, report) if return_report else spl
 
 
-def _outliers(res_pos, res_rot, w):
-    """Isolated glitches: poses whose residual departs from its neighbours' (second difference
-    along time) by more than 8 robust sigmas and 2 mm / 2 mrad. Smooth approximation error of
-    the spline, which looks like an outlier by size alone, is not flagged."""
-    bad = np.zeros(res_pos.shape[0], dtype=bool)
-    if res_pos.shape[0] < 10:
-        return bad
-    for res, floor in ((res_pos, OUTLIER_FLOOR_M), (res_rot, OUTLIER_FLOOR_RAD)):
-        d = np.zeros_like(res)
-        d[1:-1] = res[1:-1] - 0.5 * (res[:-2] + res[2:])
-        e = np.linalg.norm(d, axis=1)
-        used = e[w > 0]
-        sigma = np.median(used) / 1.538  # median of a 3-D Gaussian norm is 1.538 sigma
-        bad |= (e > OUTLIER_SIGMAS * sigma) & (e > floor)
-    # a glitch also disturbs the second difference of its neighbours: keep the locally largest
-    e_all = (np.linalg.norm(res_pos, axis=1) / OUTLIER_FLOOR_M
-             + np.linalg.norm(res_rot, axis=1) / OUTLIER_FLOOR_RAD)
-    idx = np.flatnonzero(bad)
-    keep = [i for i in idx if e_all[i] >= e_all[max(i - 1, 0): i + 2].max()]
-    out = np.zeros_like(bad)
-    out[keep] = True
-    return out & (w > 0)
-
-
-def _solve(prob, Rc, kind, max_iter, tick, smoothness, dt):
+def _solve(probs, Rc, kind, max_iter, tick, smoothness):
+    rot, pos = probs
     try:
-        Pc = prob.solve_positions()
-        Rc, res_rot, iters, conv = prob.solve_rotations(Rc, max_iter=max_iter, progress=tick)
-        res_pos = prob.position_residuals(Pc)
         if kind == "se3":
-            Rc, Pc, res6, it2, conv = prob._gauss_newton(Rc, Pc, max_iter, 1e-12, tick)
+            Pc = rot.solve_positions()
+            Rc, res_rot, iters, conv = rot.solve_rotations(Rc, max_iter=max_iter, progress=tick)
+            Rc, Pc, res6, it2, conv = rot._gauss_newton(Rc, Pc, max_iter, 1e-12, tick)
             iters += it2
-            spl = Spline(prob.t0, prob.dt, Pc, Rc, kind, prob.order)
-            p_fit, q_fit = spl.pose(prob.t)
-            res_pos = prob.P - p_fit
-            res_rot = lie.so3_log(np.matmul(np.swapaxes(lie.quat_xyzw_to_matrix(q_fit), 1, 2), prob.R))
+            spl = Spline(rot.t0, rot.dt, Pc, Rc, kind, rot.order)
+            p_fit, q_fit = spl.pose(rot.t)
+            res_pos = rot.P - p_fit
+            res_rot = lie.so3_log(np.matmul(np.swapaxes(lie.quat_xyzw_to_matrix(q_fit), 1, 2), rot.R))
+        else:
+            Pc = pos.solve_positions()
+            res_pos = pos.position_residuals(Pc)
+            Rc, res_rot, iters, conv = rot.solve_rotations(Rc, max_iter=max_iter, progress=tick)
     except np.linalg.LinAlgError:
         raise SplineImuError(
-            f"the fit is singular at knot spacing {dt:g} s with smoothness {smoothness:g}: use a larger "
-            "knot spacing or a positive smoothness") from None
+            f"the fit is singular at knot spacing {min(rot.dt, pos.dt):g} s with smoothness {smoothness:g}: use a "
+            "larger knot spacing or a positive smoothness") from None
     return Rc, Pc, res_pos, res_rot, iters, conv

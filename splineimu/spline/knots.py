@@ -1,225 +1,454 @@
-"""Automatic knot spacing: minimize the predicted error of the synthesized IMU signals.
+"""Automatic knot spacing and order, for rotation and position independently.
 
-For a least-squares spline of order ``k`` and knot spacing ``dt`` the error of an ``r``-th
-derivative has two parts (in the spirit of Ovren & Forssen, "Spline Error Weighting",
-CVPR 2018):
+Each part is chosen on its own R3 signal: the control positions of the position spline, and
+for the rotation the accumulated body-frame increments ``theta_m = sum_{l <= m} Log(R_{l-1}^T
+R_l)`` (white pose noise stays white in it, and its time derivative is the body rate). The
+target is the error of the derivative the IMU sees: the accelerometer (2nd derivative of the
+position) and the gyroscope (1st derivative of theta).
 
-- **bias**: the spline is a low-pass filter; motion above its cut-off is lost. With the
-  spline's relative error transfer ``E_r(f; dt)`` (measured by fitting sinusoids on a
-  synthetic uniform grid with the same sample rate) and the motion's power spectrum
-  ``S(f)``, ``bias^2 = sum_f E_r(f; dt) (2 pi f)^(2r) S(f)``;
-- **variance**: pose noise passes through the fit; ``var = sigma^2 G_r(dt)`` with the noise
-  gain ``G_r`` measured by fitting white noise on the same synthetic grid.
+Method
+------
+1. **Blocked cross-validation** on held-out poses gives the value-optimal spacing per order
+   (4, 5, 6): consecutive poses are grouped in blocks, the blocks dealt to 4 folds in turn, and
+   each fold predicted by the spline fitted to the other three; the score is the mean squared
+   prediction error away from the ends. The grid runs from 0.7x the median pose spacing (no
+   floor at twice the pose spacing) to a quarter of the span, coarse steps of 1.6x and a finer
+   step around the best. The block length comes from the data: a first pass with 0.1 s blocks,
+   whose residual gives the noise correlation time (the lag where its autocorrelation falls
+   below 0.1); blocks of 3 correlation times (1 pose for white noise) then keep correlated or
+   upsampled noise of a held-out block independent of its training neighbours.
+2. **A noise surrogate**: the residual of that fit is the pose noise times the fit's residual
+   transfer, which is measured by passing a white draw through the same fit; dividing the
+   residual's periodogram by it estimates the noise spectrum from about the fit's cut-off up,
+   continued flat below (white, AR(1) and upsampled noise are flat there). A series with that
+   spectrum is drawn.
+3. **The derivative's error on a ladder** of spacings (steps of 1.25x around the value-optimal
+   one, per order): signal and surrogate are fitted together; the noise part is the surrogate
+   fit's derivative, the bias part the change of the signal fit's derivative from the rung
+   below less the surrogate's change. The (order, spacing) with the smallest predicted error
+   wins, and that prediction is reported (``predicted_gyro_rms_rad_s``,
+   ``predicted_accel_rms_m_s2``); the same profile over the first and last ``k`` spacings gives
+   the error at the ends.
+4. **Low-rate or re-estimated input** (the power of the second differences falls toward the
+   Nyquist frequency: the top of the band holds motion, not noise, :func:`motion_limited`) is
+   searched at finer spacings, down to below the pose spacing, with a tenth of the surrogate.
+5. The rotation spacing never exceeds the time in which the input turns by 60 degrees
+   (:func:`max_rotation_spacing`): control rotations further apart cannot be told from the
+   opposite turn.
 
-``S(f)`` is the periodogram of the positions (``r = 2``, accelerometer) and of the
-accumulated body rotation increments (``r = 1``, gyroscope), resampled to a uniform grid;
-the noise levels ``sigma`` are read from the flat high-frequency floor of those spectra
-(nothing needs to be told). The chosen spacing minimizes
-``E_acc / a_ref^2 + E_gyro / g_ref^2`` with ``a_ref / g_ref = 10`` (a typical MEMS IMU's
-accelerometer-to-gyroscope noise-density ratio, e.g. 2e-3 / 1.7e-4 for the ADIS16448), over a
-log-spaced grid from the sample spacing to a quarter of the span. With ``order="auto"`` the
-orders 4, 5 and 6 are compared the same way and the best predicted one is taken.
+Cost: per (order, spacing) one pass over the poses for the normal equations of all folds,
+banded Cholesky solves of the control-point size and one pass for the predictions; inputs
+longer than :data:`MAX_CV_POSES` are cross-validated on evenly spread windows (the spacing is
+a local property), so the choice costs the same for a minute and for an hour.
+
+Where it fails: noise correlated over longer than the motion's own time scale is motion to
+any method that sees only the poses (it is kept); noise whose level changes along the
+recording (tracking worse during fast motion) is estimated as its average, so the fast parts
+get too little smoothing (BROAD 09: the synthesized gyro holds more above 15 Hz than the real
+IMU); a trajectory whose character changes (rest, then fast motion) gets one spacing per
+quantity for the whole of it; smooth input sampled so sparsely that its top octave holds
+neither noise nor motion is taken as noise-limited.
 """
 
 from __future__ import annotations
 
 import numpy as np
-from scipy.linalg import solveh_banded
 
 from .. import lie
 from .._kernels import fit as _kf
-from .basis import basis_values, blending_matrix
+from .banded import (
+    DEFAULT_SMOOTHNESS,
+    SPARSE_SMOOTHNESS,
+    add_position_penalty,
+    layout,
+    row_weights,
+    solve_banded_scalar,
+)
+from .basis import blending_matrix
+from .report import WARN_ACCEL_M_S2, WARN_GYRO_RAD_S, FitWarning
 
-ACCEL_TO_GYRO_WEIGHT = 10.0
-_N_FREQ = 40
-_SYN_SEGMENTS = 16
-
-
-def _uniform_resample(t, X, rate):
-    n = max(int(np.floor((t[-1] - t[0]) * rate)) + 1, 8)
-    tu = t[0] + np.arange(n) / rate
-    return tu, np.column_stack([np.interp(tu, t, X[:, i]) for i in range(X.shape[1])])
-
-
-def _noise_sigma(X):
-    """White-noise sigma (per axis, averaged) from 4th differences (var = 70 sigma^2), robust
-    (MAD); smooth motion only contributes ~ h^4 times its 4th derivative."""
-    if X.shape[0] < 12:
-        return 0.0
-    d4 = np.diff(X, n=4, axis=0)
-    mad = np.median(np.abs(d4 - np.median(d4, axis=0)), axis=0) * 1.4826
-    return float(np.sqrt(np.mean(mad**2) / 70.0))
-
-
-def _derivative_spectrum(X, rate, deriv):
-    """Signal power per bin of the deriv-th derivative of the motion (summed over axes) and the
-    white-noise sigma of the samples.
-
-    The spectrum is that of Hann-windowed finite differences. The noise level is read from
-    the top 40 % of the band, where smooth motion has no power; the signal is what stands
-    clearly (2x) above that floor after averaging 16 neighbouring bins, up to the highest
-    such frequency, with the difference filter's response corrected to the true derivative
-    (the floor is subtracted from the raw bins, so noise-only bins average out).
-    """
-    h = 1.0 / rate
-    y = np.diff(X, n=deriv, axis=0) / h**deriv
-    n = y.shape[0]
-    w = np.hanning(n)
-    F = np.fft.rfft((y - y.mean(axis=0)) * w[:, None], axis=0)
-    P = (np.abs(F) ** 2).sum(axis=1) * 2.0 / (n * np.sum(w**2))
-    f = np.fft.rfftfreq(n, h)
-    shape = (2.0 * np.sin(np.pi * f * h) / h) ** (2 * deriv) * 2.0 / n  # white noise, unit variance
-    hi = f > 0.6 * f[-1]
-    nvar = float(np.mean(P[hi] / shape[hi])) if hi.sum() >= 4 else 0.0  # = axes * sigma^2
-    noise = nvar * shape
-    L = 16
-    Ps = np.convolve(P, np.ones(L) / L, mode="same") if P.size > 4 * L else P
-    above = np.flatnonzero(Ps > 2.0 * noise)
-    S = np.zeros_like(P)
-    if above.size:
-        top = above[-1] + 1
-        nz = slice(1, top)
-        true = (2 * np.pi * f[nz]) ** (2 * deriv) / np.maximum(shape[nz] * n / 2.0, 1e-300)
-        # the raw periodogram (not the averaged one, which would smear strong low-frequency lines
-        # to where the spline's error transfer is large); noise-only bins average out
-        S[nz] = (P[nz] - noise[nz]) * true
-    return f, S, float(np.sqrt(nvar / X.shape[1]))
+ORDERS = (4, 5, 6)
+N_FOLDS = 4
+#: Longer inputs are cross-validated on windows totalling about this many poses.
+MAX_CV_POSES = 24_000
+_N_WINDOWS = 6
+#: Coarse step of the spacing grid, and how much better (relatively) a lower order must score
+#: in the first cross-validation pass.
+_STEP = 1.6
+_ORDER_PREFERENCE = 0.02
+#: The rotation spline's neighbouring control rotations may turn by at most this at the
+#: input's fastest rate (increments are taken as the shortest turn, below pi).
+MAX_CONTROL_TURN_RAD = np.pi / 3
+#: Ratio between neighbouring spacings where the derivative's error is predicted.
+_LADDER = 1.25
+#: Fraction of each window's span at both ends left out of the score (one-sided data).
+_END_FRACTION = 0.05
+#: The residual autocorrelation below which noise counts as uncorrelated.
+_ACF_LEVEL = 0.1
 
 
-class _Transfer:
-    """Error transfer of LS spline fits on a synthetic uniform grid."""
+def max_rotation_spacing(t, R):
+    """Largest rotation knot spacing over which the input turns by at most
+    :data:`MAX_CONTROL_TURN_RAD` anywhere (neighbouring control rotations must stay well within
+    the shortest-turn range of their increments). Angles are measured over the spacing itself,
+    so pose noise does not shrink the limit."""
+    n = t.size
+    h = float(np.median(np.diff(t))) if n > 1 else 1.0
 
-    def __init__(self, rate):
-        self.rate = rate
+    def turn(m):
+        # windows that span a gap are left out (the fit bridges gaps with the smoothest turn)
+        ok = (t[m:] - t[:-m]) <= 1.5 * m * h + 2.0 * h
+        if not ok.any():
+            return 0.0
+        ang = np.linalg.norm(lie.so3_log(np.matmul(np.swapaxes(R[:-m][ok], 1, 2), R[m:][ok])), axis=1)
+        return float(np.max(ang))
 
-    def __call__(self, order, dt, freqs):
-        from scipy.sparse import csr_matrix
+    if n < 2 or turn(1) > MAX_CONTROL_TURN_RAD:
+        return 0.7 * h
+    m = 1
+    while 2 * m < n and turn(2 * m) <= MAX_CONTROL_TURN_RAD:
+        m *= 2
+    if 2 * m >= n:
+        return np.inf
+    lo_m, hi_m = m, 2 * m  # turn(lo_m) within, turn(hi_m) beyond
+    while hi_m - lo_m > max(1, lo_m // 8):
+        mid = (lo_m + hi_m) // 2
+        lo_m, hi_m = (mid, hi_m) if turn(mid) <= MAX_CONTROL_TURN_RAD else (lo_m, mid)
+    return lo_m * h
 
-        k = order
-        nseg = _SYN_SEGMENTS
-        span = nseg * dt
-        m = max(int(np.floor(span * self.rate)), nseg * 2)
-        t = np.linspace(0.0, span, m + 1)
-        s = t / dt
-        n = nseg + k - 1
-        seg = np.minimum(np.floor(s).astype(int), nseg - 1)
-        B = basis_values(k, s - seg)
-        rows = np.repeat(np.arange(t.size), k)
-        cols = (seg[:, None] + np.arange(k)).ravel()
-        A = csr_matrix((B.ravel(), (rows, cols)), shape=(t.size, n))
-        Hs = np.zeros((n, k))
-        rhs0 = np.zeros((n, 3))
-        _kf.position_normal_equations(np.ascontiguousarray(s), np.ones(t.size), np.zeros((t.size, 3)),
-                                      blending_matrix(k), nseg, Hs, rhs0)
-        from .fit import DEFAULT_SMOOTHNESS, _add_position_penalty
 
-        _add_position_penalty(Hs, DEFAULT_SMOOTHNESS * t.size / n, min(3, k - 1))
-        ab = np.zeros((k, n))
-        for c in range(k):
-            ab[k - 1 - c, c:] = Hs[: n - c, c]
-        w = 2 * np.pi * freqs
-        ph = np.outer(t, w)
-        rng = np.random.default_rng(12345)
-        Y = np.concatenate([np.cos(ph), np.sin(ph), rng.normal(size=(t.size, 16))], axis=1)
-        C = solveh_banded(ab, A.T @ Y, lower=False, check_finite=False)
-        te = np.linspace(span * 0.3, span * 0.7, 240)
-        se = te / dt
-        sege = np.floor(se).astype(int)
-        nf = freqs.size
-        phe = np.outer(te, w)
-        out = {}
-        for r in (1, 2):
-            Bd = basis_values(k, se - sege, derivative=r) / dt**r
-            est = sum(Bd[:, j:j + 1] * C[sege + j] for j in range(k))
-            if r == 1:
-                true = np.concatenate([-np.sin(phe) * w, np.cos(phe) * w], axis=1)
-            else:
-                true = np.concatenate([-np.cos(phe) * w**2, -np.sin(phe) * w**2], axis=1)
-            err = est[:, :2 * nf] - true
-            E = (np.mean(err[:, :nf] ** 2, axis=0) + np.mean(err[:, nf:2 * nf] ** 2, axis=0)) / w ** (2 * r)
-            G = float(np.mean(est[:, 2 * nf:] ** 2))
-            out[r] = (E, G)
+def rotation_signal(R):
+    """Accumulated body-frame increments (N, 3) of rotations R (N, 3, 3)."""
+    inc = lie.so3_log(np.matmul(np.swapaxes(R[:-1], 1, 2), R[1:]))
+    return np.vstack([np.zeros(3), np.cumsum(inc, axis=0)])
+
+
+class _Window:
+    """One stretch of the signal that is fitted on its own."""
+
+    def __init__(self, t, X, w):
+        self.t, self.X, self.w = t, X, w
+        n = t.size
+        self.index = np.arange(n)
+        lo, hi = t[0] + _END_FRACTION * (t[-1] - t[0]), t[-1] - _END_FRACTION * (t[-1] - t[0])
+        self.scored = (t >= lo) & (t <= hi) & (w > 0)
+
+    def folds(self, block):
+        return ((self.index // max(int(block), 1)) % N_FOLDS).astype(np.int64)
+
+    def fit_folds(self, k, dt, fold, nfold, X=None):
+        """Control points (nfold, n, d) of the fits of X (default: the signal) without each
+        fold, and the layout."""
+        X = self.X if X is None else X
+        t0, dt_, nseg, n = layout(self.t[0], self.t[-1], dt, k)
+        s = np.ascontiguousarray((self.t - t0) / dt_)
+        M = blending_matrix(k)
+        H = np.zeros((nfold, n, k))
+        rhs = np.zeros((nfold, n, X.shape[1]))
+        _kf.fold_normal_equations(s, self.w, fold, X, M, nseg, H, rhs)
+        Ht, rt = H.sum(axis=0), rhs.sum(axis=0)
+        seg = np.clip(np.floor(s).astype(np.int64), 0, nseg - 1)
+        used = self.w > 0
+        counts = np.zeros((nfold, nseg))
+        np.add.at(counts, (fold[used], seg[used]), 1.0)
+        total = counts.sum(axis=0)
+        C = np.empty((nfold, n, X.shape[1]))
+        r = min(3, k - 1)
+        for f in range(nfold):
+            Hf = Ht - H[f] if nfold > 1 else Ht.copy()
+            cf = total - counts[f] if nfold > 1 else total
+            sparse = np.convolve((cf == 0).astype(float), np.ones(k))[:n] > 0
+            per_ctrl = max(float(np.sum(Hf[:, 0])) / n, 1e-12)
+            mu = np.where(row_weights(sparse, r + 1), SPARSE_SMOOTHNESS, DEFAULT_SMOOTHNESS) * per_ctrl
+            add_position_penalty(Hf, mu, r)
+            try:
+                C[f] = solve_banded_scalar(Hf, (rt - rhs[f]) if nfold > 1 else rt)
+            except np.linalg.LinAlgError:
+                # long stretches without data at a fine spacing: numerically singular, a
+                # spacing not to be chosen
+                C[f] = np.nan
+        return C, s, M, nseg, dt_
+
+    def score(self, k, dt, fold):
+        C, s, M, nseg, _ = self.fit_folds(k, dt, fold, N_FOLDS)
+        e = np.empty(self.t.size)
+        _kf.fold_prediction_errors(s, fold, self.X, C, M, nseg, e)
+        total = float(np.sum(e[self.scored]))
+        return (total if np.isfinite(total) else np.inf), int(np.count_nonzero(self.scored))
+
+    def derivative(self, k, dt, fold, nfold, r, X=None):
+        """r-th derivative of the fits without each fold (nfold, N, d) at every sample."""
+        C, s, M, nseg, dt_ = self.fit_folds(k, dt, fold, nfold, X)
+        out = np.empty((nfold, self.t.size, C.shape[2]))
+        for f in range(nfold):
+            _kf.spline_derivative(s, C[f], M, nseg, 1.0 / dt_, r, out[f])
         return out
 
-
-def _predict(transfer, order, dt, spec_a, spec_g, sig_p, sig_r):
-    fr = np.geomspace(1e-3 / dt, 1.5 / dt, _N_FREQ)
-    res = transfer(order, dt, fr)
-    preds = []
-    for (f, S), sigma, r in ((spec_a, sig_p, 2), (spec_g, sig_r, 1)):
-        E, G = res[r]
-        Ef = np.minimum(np.interp(f, fr, E, left=E[0], right=1.0), 1.0)
-        Ef[f > fr[-1]] = 1.0
-        bias2 = max(float(np.sum(Ef * S)), 0.0)
-        var = sigma**2 * G * 3.0
-        preds.append(np.sqrt(bias2 + var))
-    return preds
+    def residual(self, k, dt):
+        zero = np.zeros(self.t.size, dtype=np.int64)
+        d = self.derivative(k, dt, zero, 1, 0)[0]
+        return (self.X - d)[self.scored]
 
 
-def choose_knot_spacing(t, P, R, order=4, candidates=None):
-    """Pick the knot spacing (and, with ``order="auto"``, the order) for a fit.
+def _windows(t, X, w):
+    n = t.size
+    if n <= MAX_CV_POSES:
+        return [_Window(t, X, w)]
+    size = MAX_CV_POSES // _N_WINDOWS
+    starts = np.linspace(0, n - size, _N_WINDOWS).astype(int)
+    return [_Window(t[a:a + size], X[a:a + size], w[a:a + size]) for a in starts]
+
+
+def _correlation_lag(res):
+    """Lag (samples) where the residual's autocorrelation first falls below _ACF_LEVEL."""
+    x = res - res.mean(axis=0)
+    n = x.shape[0]
+    if n < 8:
+        return 1
+    nfft = 1 << int(np.ceil(np.log2(2 * n)))
+    F = np.fft.rfft(x, nfft, axis=0)
+    acf = np.fft.irfft((np.abs(F) ** 2).sum(axis=1), nfft)[: min(n // 4, 400)]
+    if acf[0] <= 0:
+        return 1
+    below = np.flatnonzero(acf / acf[0] < _ACF_LEVEL)
+    return int(below[0]) if below.size else int(acf.size)
+
+
+def _search(windows, orders, grid, block, lo, hi=np.inf):
+    """Scores {(k, dt): score} over a coarse grid and a refinement around each order's best."""
+    folds = [wd.folds(block) for wd in windows]
+    table = {}
+
+    def score(k, dt):
+        if (k, dt) not in table:
+            num = den = 0
+            for wd, fd in zip(windows, folds):
+                if (wd.t[-1] - wd.t[0]) / dt < 2:
+                    return np.inf
+                a, b = wd.score(k, dt, fd)
+                num, den = num + a, den + b
+            table[(k, dt)] = num / max(den, 1)
+        return table[(k, dt)]
+
+    for k in orders:
+        vals = [score(k, dt) for dt in grid]
+        i = int(np.argmin(vals))
+        for dt in (grid[i] / np.sqrt(_STEP), grid[i] * np.sqrt(_STEP)):
+            if lo <= dt <= hi:
+                score(k, dt)
+    return table
+
+
+def _best(table, orders):
+    best = {k: min((v, dt) for (kk, dt), v in table.items() if kk == k) for k in orders}
+    k_best = min(orders, key=lambda k: best[k][0] * (1.0 - _ORDER_PREFERENCE * (k - min(orders))))
+    return k_best, best[k_best][1], best
+
+
+def motion_limited(X):
+    """True when the top of the band holds motion rather than noise: the power of the second
+    differences falls toward the Nyquist frequency (per octave: [1/8, 1/4] and [1/4, 1/2] of
+    the band at least 3x and 1.5x the top octave), as for exact, low-rate or re-estimated poses.
+    White noise rises there (f^4), coloured and upsampled noise stay within those ratios."""
+    if X.shape[0] < 64:
+        return False
+    d = np.diff(X, 2, axis=0)
+    P = (np.abs(np.fft.rfft(d - d.mean(axis=0), axis=0)) ** 2).sum(axis=1)
+    n = P.size
+    low, mid, top = (P[n * a // 8: n * b // 8].mean() for a, b in ((1, 2), (2, 4), (4, 8)))
+    return bool(low > 3.0 * top and mid > 1.5 * top)
+
+
+def _noise_surrogate(wd, k, dt_cv, seed=7):
+    """A noise series (N, 3) with the spectrum of the pose noise, for propagation through fits.
+
+    The residual of the fit at the value-optimal spacing is the pose noise times the fit's
+    residual transfer ``(1 - H(f))^2`` (and motion the fit misses); that transfer is measured
+    by passing a white draw through the same fit. The residual's smoothed periodogram divided by
+    it estimates the noise spectrum where the transfer is at least 0.2 (from about the fit's
+    cut-off up), and is continued flat below (white, AR(1)-coloured and upsampled noise are
+    all flat there). A series with that spectrum and random phases is drawn.
+    """
+    rng = np.random.default_rng(seed)
+    white = rng.normal(size=wd.X.shape)
+    zero = np.zeros(wd.t.size, dtype=np.int64)
+    both = np.ascontiguousarray(np.hstack([wd.X, white]))
+    res = both - wd.derivative(k, dt_cv, zero, 1, 0, both)[0]
+    res -= res.mean(axis=0)
+    n = res.shape[0]
+    width = max(8, (n // 2) // 256)
+    kernel = np.ones(width) / width
+
+    def spectrum(x):
+        P = np.abs(np.fft.rfft(x, axis=0)) ** 2
+        return np.column_stack([np.convolve(P[:, j], kernel, mode="same") for j in range(x.shape[1])])
+
+    P = spectrum(res[:, :3])
+    gain = spectrum(res[:, 3:]) / np.maximum(spectrum(white), 1e-300)
+    gain = np.mean(gain, axis=1)
+    ok = np.flatnonzero(gain >= 0.2)
+    if ok.size:
+        first = ok[0]
+        P[first:] /= np.maximum(gain[first:, None], 0.2)
+        P[:first] = P[first]
+    phase = np.exp(2j * np.pi * rng.random(P.shape))
+    phase[0] = 1.0
+    return np.fft.irfft(np.sqrt(P) * phase, n, axis=0)
+
+
+def _ladder_errors(windows, k, ladder, noises, r):
+    """Predicted r-th derivative error at the spacings ``ladder[1:]`` of a geometric ladder.
+
+    Each rung fits the signal and the noise surrogate together (one system, six columns): the
+    noise part is the surrogate fit's derivative; the bias part is the change of the signal
+    fit's derivative from the rung below, less that of the surrogate fit's. Returns (noise
+    variance, bias^2, per-window noise profiles) for each rung above the first.
+    """
+    var = np.zeros(len(ladder))
+    bias2 = np.zeros(len(ladder))
+    ends = []
+    prev = [None] * len(windows)
+    for j, dt in enumerate(ladder):
+        nsc = 0
+        change = 0.0
+        e_list = []
+        for i, wd in enumerate(windows):
+            zero = np.zeros(wd.t.size, dtype=np.int64)
+            d = wd.derivative(k, dt, zero, 1, r, np.ascontiguousarray(np.hstack([wd.X, noises[i]])))[0]
+            e2 = np.sum(d[:, 3:] ** 2, axis=1)
+            var[j] += float(np.sum(e2[wd.scored]))
+            nsc += int(np.count_nonzero(wd.scored))
+            if prev[i] is not None:
+                D = d[wd.scored] - prev[i]
+                change += float(np.sum(D[:, :3] ** 2) - np.sum(D[:, 3:] ** 2))
+            prev[i] = d[wd.scored]
+            e_list.append((wd.t, e2))
+        var[j] = var[j] / max(nsc, 1) if np.isfinite(var[j]) else np.inf
+        bias2[j] = max(change / max(nsc, 1), 0.0) if np.isfinite(change) else np.inf
+        ends.append(e_list)
+    return var[1:], bias2[1:], ends[1:]
+
+
+def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf):
+    """Order and spacing (at most ``dt_max``) for an ordinary B-spline fit of signal X (N, 3)
+    whose r-th derivative matters; returns a dict (see :func:`choose_knot_spacing`)."""
+    orders = tuple(int(k) for k in orders)
+    windows = _windows(t, X, w)
+    h = float(np.median(np.diff(t)))
+    span = min(wd.t[-1] - wd.t[0] for wd in windows)
+    lo = 0.7 * h
+    hi = max(min(span / 4.0, 2.0, dt_max), lo * 1.01)
+    lo = min(lo, hi / 1.01)
+    if dt_fixed is None:
+        grid = np.geomspace(lo, hi, max(int(np.ceil(np.log(hi / lo) / np.log(_STEP))) + 1, 2))
+    else:
+        grid = np.array([float(dt_fixed)])
+    # 1. cross-validation with 0.1 s blocks, then with blocks of 3 noise correlation times
+    block = max(1, int(round(0.1 / h)))
+    k_first = 4 if 4 in orders else orders[0]
+    table = _search(windows, (k_first,), grid, block, lo, hi)
+    k0, dt0, _ = _best(table, (k_first,))
+    lag = _correlation_lag(np.vstack([wd.residual(k0, dt0) for wd in windows]))
+    # the second pass looks within 4x of the first choice (leaks of correlated noise through
+    # 0.1 s blocks move it by less)
+    near = grid[(grid >= dt0 / 4.0) & (grid <= dt0 * 4.0)] if grid.size > 1 else grid
+    if (1 if lag <= 1 else 3 * lag) != block:
+        block = 1 if lag <= 1 else 3 * lag
+        table = _search(windows, orders, near, block, lo, hi)
+    else:
+        table.update(_search(windows, tuple(k for k in orders if k != k_first), near, block, lo, hi))
+    # 2. per order, the derivative's error on a ladder around the value-optimal spacing, with a
+    # surrogate of the pose noise (spectrum from the residual) propagated through the same fits
+    k_cv, dt_cvb = _best(table, orders)[:2]
+    noises = [_noise_surrogate(wd, k_cv, dt_cvb) for wd in windows]
+    limited = dt_fixed is None and all(motion_limited(wd.X) for wd in windows)
+    if limited:
+        # the residual is mostly motion the fit missed, not noise: look at finer spacings
+        noises = [0.1 * nz for nz in noises]
+    rows = []
+    best = None
+    for k in orders:
+        dt_cv = min((v, dt) for (kk, dt), v in table.items() if kk == k)[1]
+        steps = np.arange(-1, 1) if dt_fixed is not None else (np.arange(-4, 1) if limited else np.arange(-2, 3))
+        ladder = dt_cv * _LADDER ** steps
+        ladder = np.r_[ladder[0], ladder[1:][(ladder[1:] >= lo * 0.99) & (ladder[1:] <= hi * (1.0 + 1e-9))]]
+        var, bias2, ends = _ladder_errors(windows, k, ladder, noises, r)
+        pred = np.sqrt(var + bias2)
+        for j, dt in enumerate(ladder[1:]):
+            rows.append({"order": k, "knot_spacing_s": float(dt), "predicted_rms": float(pred[j]),
+                         "predicted_noise_rms": float(np.sqrt(var[j])), "cv_knot_spacing_s": float(dt_cv)})
+            if best is None or pred[j] < best[0]:
+                best = (float(pred[j]), k, float(dt), float(var[j]), ends[j], float(dt_cv))
+    if best is None:
+        raise ValueError("no knot spacing could be evaluated (too few poses for the orders?)")
+    pred, k, dt, var, ends, dt_cv = best
+    # the first and last k knot spacings see one-sided data: their noise part on its own
+    zone = k * dt
+    (t_a, e_a), (t_b, e_b) = ends[0], ends[-1]
+    head = t_a <= t_a[0] + zone
+    tail = t_b >= t_b[-1] - zone
+    end_rms = float(np.sqrt(max(np.mean(e_a[head]), np.mean(e_b[tail])) + pred**2 - var))
+    return {
+        "order": k, "knot_spacing_s": dt, "cv_knot_spacing_s": dt_cv,
+        "block_poses": int(block), "noise_correlation_poses": int(lag), "motion_limited": bool(limited),
+        "predicted_rms": pred, "predicted_noise_rms": float(np.sqrt(var)),
+        "cv_rms": float(np.sqrt(table[(k, dt_cv)])), "end_zone_s": float(zone), "end_predicted_rms": end_rms,
+        "candidates": rows,
+    }
+
+
+def choose_knot_spacing(t, P, R, w=None, rotation_order="auto", position_order="auto",
+                        rotation_dt=None, position_dt=None):
+    """Choose order and knot spacing of rotation and position from the poses.
 
     Parameters
     ----------
     t : (N,) seconds, increasing
     P : (N, 3) positions
     R : (N, 3, 3) rotations
-    order : int or "auto"
+    w : (N,) weights, optional (0 = left out)
+    rotation_order, position_order : int or "auto"
+    rotation_dt, position_dt : float, optional
+        Fixed spacings (only the order, if "auto", is then chosen).
 
     Returns
     -------
-    dict with ``knot_spacing_s``, ``order``, ``position_noise_m``, ``angle_noise_rad``,
-    ``predicted_gyro_rms_rad_s``, ``predicted_accel_rms_m_s2``, ``candidates`` (table).
+    dict with ``rotation`` and ``position`` (each: ``order``, ``knot_spacing_s``,
+    ``predicted_rms`` of the gyro [rad/s] or accel [m/s^2], the cross-validation table),
+    ``predicted_gyro_rms_rad_s``, ``predicted_accel_rms_m_s2``, ``method``.
     """
-    dts = np.diff(t)
-    med = float(np.median(dts))
-    rate = 1.0 / med
-    span = float(t[-1] - t[0])
-    # rotation "signal": accumulated body-frame increments (white pose noise stays white)
-    inc = lie.so3_log(np.matmul(np.swapaxes(R[:-1], 1, 2), R[1:]))
-    theta = np.vstack([np.zeros(3), np.cumsum(inc, axis=0)])
-    # keep the spectrum estimate bounded in cost: at most ~2^18 samples
-    rs = rate if span * rate <= 2**18 else 2**18 / span
-    _, Pu = _uniform_resample(t, P, rs)
-    _, Tu = _uniform_resample(t, theta, rs)
-    f_a, S_a, sig_p = _derivative_spectrum(Pu, rs, 2)
-    f_g, S_g, sig_r = _derivative_spectrum(Tu, rs, 1)
-    spec_a, spec_g = (f_a, S_a), (f_g, S_g)
-    refine = candidates is None
-    if candidates is None:
-        lo = 2.0 * med
-        hi = max(min(span / 4.0, 2.0), lo * 1.01)
-        candidates = np.geomspace(lo, hi, 12)
-    orders = [4, 5, 6] if order == "auto" else [int(order)]
-    transfer = _Transfer(rate)
-    rows = []
-
-    def evaluate(k, dt):
-        ea, eg = _predict(transfer, k, dt, spec_a, spec_g, sig_p, sig_r)
-        cost = (ea / ACCEL_TO_GYRO_WEIGHT) ** 2 + eg**2
-        rows.append((k, float(dt), float(ea), float(eg), float(cost)))
-
-    for k in orders:
-        for dt in candidates:
-            if span / dt >= 1:
-                evaluate(k, dt)
-    if refine and len(candidates) > 2:
-        # coarse-to-fine: a finer grid between the neighbours of the best coarse spacing
-        k0, dt0 = min(rows, key=lambda r: r[4])[:2]
-        step = candidates[1] / candidates[0]
-        for dt in np.geomspace(dt0 / step, dt0 * step, 7)[1:-1]:
-            if dt != dt0 and dt >= candidates[0] and span / dt >= 1:
-                evaluate(k0, dt)
-    best = min(rows, key=lambda r: r[4])
+    w = np.ones(t.size) if w is None else np.asarray(w, dtype=np.float64)
+    ro = ORDERS if rotation_order == "auto" else (int(rotation_order),)
+    po = ORDERS if position_order == "auto" else (int(position_order),)
+    rot = choose_signal(t, np.ascontiguousarray(rotation_signal(R)), w, 1, ro, rotation_dt,
+                        max_rotation_spacing(t, R))
+    pos = choose_signal(t, np.ascontiguousarray(P), w, 2, po, position_dt)
     return {
-        "knot_spacing_s": best[1],
-        "order": best[0],
-        "position_noise_m": sig_p,
-        "angle_noise_rad": sig_r,
-        "predicted_accel_rms_m_s2": best[2],
-        "predicted_gyro_rms_rad_s": best[3],
-        "method": "spectral error prediction (bias from the motion spectrum, variance from the noise floor)",
-        "candidates": [
-            {"order": r[0], "knot_spacing_s": r[1], "accel_rms": r[2], "gyro_rms": r[3]} for r in rows
-        ],
+        "rotation": rot, "position": pos,
+        "predicted_gyro_rms_rad_s": rot["predicted_rms"],
+        "predicted_accel_rms_m_s2": pos["predicted_rms"],
+        "position_noise_m": pos["cv_rms"] / np.sqrt(3.0),
+        "angle_noise_rad": rot["cv_rms"] / np.sqrt(3.0),
+        "method": "blocked cross-validation on held-out poses (rotation and position separately)",
     }
+
+
+def prediction_warnings(choice, t):
+    """Warnings about large predicted errors and about ends less accurate than the interior."""
+    if choice is None:
+        return []
+    out = []
+    g, a = choice["predicted_gyro_rms_rad_s"], choice["predicted_accel_rms_m_s2"]
+    if g > WARN_GYRO_RAD_S or a > WARN_ACCEL_M_S2:
+        out.append(FitWarning("predicted_error_high", f"predicted error of the synthesized IMU is gyro ~{g:.3g} rad/s, "
+                              f"accel ~{a:.3g} m/s^2 (above {WARN_GYRO_RAD_S:g} rad/s or {WARN_ACCEL_M_S2:g} m/s^2): "
+                              "the poses are too noisy or too sparse for the motion"))
+    for key, name, unit, lim in (("rotation", "gyro", "rad/s", WARN_GYRO_RAD_S),
+                                 ("position", "accel", "m/s^2", WARN_ACCEL_M_S2)):
+        c = choice[key]
+        if c["end_predicted_rms"] > max(3.0 * c["predicted_rms"], lim):
+            z = c["end_zone_s"]
+            out.append(FitWarning("ends_less_accurate", f"the first and last {z:.3f} s are less accurate ({name} "
+                                  f"~{c['end_predicted_rms']:.3g} {unit} against ~{c['predicted_rms']:.3g} inside): "
+                                  f"trim {z:.3f} s from each end", float(t[0]), float(t[-1])))
+    return out

@@ -1,0 +1,78 @@
+"""Banded normal equations of spline fits: difference penalties and banded Cholesky solves.
+
+A fit's normal matrix is kept as upper blocks ``H[i, c]`` = block ``(i, i + c)``, ``c = 0 .. k-1``,
+shape (n, k, d, d) (``d = 1`` for the position part of split splines, as (n, k)).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .._kernels import fit as _kf
+
+#: Relative weight of the default smoothness penalty where data are dense (negligible bias).
+DEFAULT_SMOOTHNESS = 1e-10
+#: Relative penalty weight on control points with little data in their support (gaps, sparse
+#: stretches): there the curve is the smoothest bridge, instead of being steered by the noise of
+#: the few poses at the gap's borders.
+SPARSE_SMOOTHNESS = 1e-3
+
+
+def solve_banded_scalar(Hs, rhs):
+    """Solve the symmetric banded system with upper diagonals ``Hs`` (n, k) for ``rhs`` (n, ...)
+    (banded Cholesky in a kernel; ``Hs`` is left untouched)."""
+    n = Hs.shape[0]
+    B = np.array(rhs, dtype=np.float64, order="C").reshape(n, -1)
+    if not _kf.band_cholesky_solve(np.array(Hs, dtype=np.float64, order="C"), B):
+        raise np.linalg.LinAlgError("banded normal matrix is not positive definite")
+    return B.reshape(np.shape(rhs))
+
+
+def solve_banded_blocks(H, rhs, damping=0.0):
+    """Solve the symmetric block-banded system (upper blocks H (n, k, d, d)) for rhs (n*d, ...)."""
+    n, k, d, _ = H.shape
+    if damping:
+        H = H.copy()
+        idx = np.arange(d)
+        H[:, 0, idx, idx] += damping * np.maximum(H[:, 0, idx, idx], 1e-12)
+    band = np.zeros((n * d, k * d))
+    _kf.blocks_to_band(np.ascontiguousarray(H), band)
+    return solve_banded_scalar(band, rhs)
+
+
+def difference_coefficients(order_diff):
+    """Coefficients of the order-r difference operator: row j touches j .. j + r."""
+    c = np.array([1.0])
+    for _ in range(order_diff):
+        c = np.convolve(c, [-1.0, 1.0])
+    return c  # length r + 1
+
+
+def add_position_penalty(Hs, mu, r):
+    """Add D_r^T diag(mu) D_r to scalar banded blocks Hs (n, k); mu scalar or per row (n - r,)."""
+    n, k = Hs.shape
+    c = difference_coefficients(r)
+    L = c.size
+    if L > k or n < L:
+        return
+    mu = np.broadcast_to(np.asarray(mu, dtype=np.float64), (n - L + 1,))
+    for a in range(L):
+        for b in range(a, L):
+            Hs[a: n - L + 1 + a, b - a] += mu * c[a] * c[b]
+
+
+def row_weights(sparse, width):
+    """Per penalty row touching controls j .. j + width - 1: True where any of them is sparse."""
+    n = sparse.size
+    if n < width:
+        return np.zeros(0, dtype=bool)
+    win = np.lib.stride_tricks.sliding_window_view(sparse, width)
+    return win.any(axis=1)
+
+
+def layout(t_first, t_last, knot_spacing_s, order):
+    """Knot layout covering [t_first, t_last] exactly: (t0, dt, n_segments, n_control)."""
+    span = float(t_last - t_first)
+    nseg = max(1, int(round(span / float(knot_spacing_s))))
+    dt = span / nseg if span > 0 else float(knot_spacing_s)
+    return float(t_first), dt, nseg, nseg + order - 1

@@ -1,0 +1,166 @@
+"""Checks of a fit: glitches to drop, steps and residual bursts to warn about, input refused.
+
+Outliers (tracking glitches) are told from fast valid motion by two tests that both must hold
+for a run of poses:
+
+1. their fit residuals stand out against the *local* residual level (a running median over
+   :data:`LOCAL_WINDOW_S`, so that a stretch of fast motion the spline follows less closely
+   raises its own yardstick), by :data:`OUTLIER_SIGMAS` and the absolute floors;
+2. the data jump *into* the run and *out of* it: the first pose of the run departs from the
+   linear extrapolation of the two poses before it, and the last from that of the two after,
+   by half the run's residual and by :data:`OUTLIER_SIGMAS` robust sigmas of such
+   extrapolation errors nearby (running median). Fast motion is smooth at the pose rate, a
+   glitch is not.
+
+A run that passes (1) and jumps in but not out (or out but not in) is a step (the tracking
+moved its origin): it cannot be dropped and is warned about with its time range, as is a run
+that passes (1) without any jump (motion faster than the spline follows there), once its
+residual reaches :data:`WARN_RESIDUAL_M` or :data:`WARN_RESIDUAL_RAD`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import InputError
+from .report import FitWarning
+
+OUTLIER_SIGMAS = 8.0
+OUTLIER_FLOOR_M = 2e-3
+OUTLIER_FLOOR_RAD = 2e-3
+LOCAL_WINDOW_S = 1.0
+#: Residual runs that are not dropped are warned about from this size on (m, rad).
+WARN_RESIDUAL_M = 5e-3
+WARN_RESIDUAL_RAD = np.radians(1.0)
+#: Runs of outliers longer than this are not glitches (steps, or motion not followed).
+MAX_GLITCH_S = 0.5
+#: Consecutive poses rotating more than this are refused (pi/2: 120 deg cannot be told from -240).
+MAX_STEP_ANGLE_RAD = np.pi / 2
+
+
+def check_rotation_steps(t, R):
+    """Refuse input whose consecutive poses rotate by more than :data:`MAX_STEP_ANGLE_RAD`.
+
+    Across a gap (more than 3 median pose spacings) such a turn is not refused but returned as a
+    warning: the fit bridges the gap with the shortest turn, which may not be what happened.
+    """
+    if R.shape[0] < 2:
+        return []
+    c = np.einsum("nij,nij->n", R[:-1], R[1:])  # trace(R_a^T R_b) = 1 + 2 cos(angle)
+    ang = np.arccos(np.clip((c - 1.0) / 2.0, -1.0, 1.0))
+    dt = np.diff(t)
+    gap = dt > 3.0 * np.median(dt)
+    big = ang > MAX_STEP_ANGLE_RAD
+    if np.any(big & ~gap):
+        i = int(np.argmax(np.where(gap, 0.0, ang)))
+        raise InputError(
+            f"poses {i} and {i + 1} (t = {t[i]:.6f} s and {t[i + 1]:.6f} s) rotate by {np.degrees(ang[i]):.1f} deg: "
+            f"more than {np.degrees(MAX_STEP_ANGLE_RAD):.0f} deg between consecutive poses cannot be told from "
+            "the opposite turn; record or export the poses at a higher rate")
+    return [FitWarning("gap_turn_ambiguous", f"the poses turn by {np.degrees(ang[i]):.0f} deg across the gap from "
+                       f"{t[i]:.3f} s to {t[i + 1]:.3f} s: the fit bridges it with the shortest turn",
+                       float(t[i]), float(t[i + 1])) for i in np.flatnonzero(big & gap)]
+
+
+def _running_median(x, width):
+    from scipy.ndimage import median_filter
+
+    return median_filter(x, size=max(int(width) | 1, 3), mode="nearest")
+
+
+def _extrapolation_errors(t, Y):
+    """|Y_i - linear extrapolation from i-2, i-1| (forward) and from i+1, i+2 (backward), (N,) each;
+    zero where the three poses span a gap (more than 3 median spacings between two of them)."""
+    n = t.size
+    fwd = np.zeros(n)
+    bwd = np.zeros(n)
+    if n < 3:
+        return fwd, bwd
+    dt = np.diff(t)
+    ok = (np.maximum(dt[1:], dt[:-1]) <= 3.0 * np.median(dt))  # poses i, i+1, i+2 close together
+    a = dt[1:] / dt[:-1]
+    fwd[2:] = np.where(ok, np.linalg.norm(Y[2:] - Y[1:-1] - a[:, None] * (Y[1:-1] - Y[:-2]), axis=1), 0.0)
+    b = dt[:-1] / dt[1:]
+    bwd[:-2] = np.where(ok, np.linalg.norm(Y[:-2] - Y[1:-1] - b[:, None] * (Y[1:-1] - Y[2:]), axis=1), 0.0)
+    return fwd, bwd
+
+
+def _runs(mask, bridge=2):
+    """(start, stop) index pairs of runs of True, joining runs separated by <= bridge Falses."""
+    idx = np.flatnonzero(mask)
+    if idx.size == 0:
+        return []
+    cut = np.flatnonzero(np.diff(idx) > bridge + 1)
+    starts = np.r_[idx[0], idx[cut + 1]]
+    stops = np.r_[idx[cut], idx[-1]] + 1
+    return list(zip(starts.tolist(), stops.tolist()))
+
+
+def classify_residuals(t, P, theta, res_pos, res_rot, w):
+    """Glitch poses to drop (bool (N,)) and warnings for steps and unexplained residual bursts."""
+    n = t.size
+    drop = np.zeros(n, dtype=bool)
+    warnings = []
+    if n < 10:
+        return drop, warnings
+    h = float(np.median(np.diff(t)))
+    width = LOCAL_WINDOW_S / h
+    cand = np.zeros(n, dtype=bool)
+    score = np.zeros(n)
+    parts = []
+    for res, Y, floor, warn in ((res_pos, P, OUTLIER_FLOOR_M, WARN_RESIDUAL_M),
+                                (res_rot, theta, OUTLIER_FLOOR_RAD, WARN_RESIDUAL_RAD)):
+        e = np.linalg.norm(res, axis=1)
+        sigma = _running_median(np.where(w > 0, e, np.median(e[w > 0])), width) / 1.538
+        c = (e > OUTLIER_SIGMAS * sigma) & (e > floor) & (w > 0)
+        cand |= c
+        score = np.maximum(score, e / np.maximum(OUTLIER_SIGMAS * sigma, floor))
+        fwd, bwd = _extrapolation_errors(t, Y)
+        # jumps are judged against the local size of such extrapolation errors (fast motion has
+        # larger ones), by the same number of robust sigmas
+        jmin = np.maximum(OUTLIER_SIGMAS * _running_median(fwd, width) / 1.538, floor)
+        parts.append((e, fwd, bwd, jmin, warn))
+    for a, b in _runs(cand):
+        t0, t1 = float(t[a]), float(t[b - 1])
+        jin = jout = inside = big = False
+        for e, fwd, bwd, jmin, warn in parts:
+            top = float(e[a:b].max())
+            jin |= a == 0 or bool(fwd[a] > max(0.5 * top, jmin[a]))
+            jout |= b == n or bool(bwd[b - 1] > max(0.5 * top, jmin[b - 1]))
+            inside |= bool(np.any(fwd[a:b + 1] > np.maximum(0.25 * top, jmin[a:b + 1])))
+            big |= top >= warn
+        if jin and jout and (t1 - t0) <= MAX_GLITCH_S and (b - a) < 0.5 * n:
+            drop[a:b] = cand[a:b] | (score[a:b] > 0.5)
+        elif not big:
+            continue
+        elif jin or jout or inside:
+            warnings.append(FitWarning(
+                "unexplained_jump", f"the poses jump between {t0:.3f} s and {t1:.3f} s and the fit cannot follow "
+                "(a step of the tracking?): the synthesized IMU is wrong there", t0, t1))
+        else:
+            warnings.append(FitWarning(
+                "residual_burst", f"between {t0:.3f} s and {t1:.3f} s the fit residuals are far above their level "
+                "elsewhere (motion faster than the chosen knot spacing follows)", t0, t1))
+    return drop & (w > 0), _merge(warnings)
+
+
+def _merge(warnings, max_listed=20):
+    """Keep at most max_listed warnings per code; say how many more there were."""
+    out, count = [], {}
+    for wn in warnings:
+        count[wn.code] = count.get(wn.code, 0) + 1
+        if count[wn.code] <= max_listed:
+            out.append(wn)
+    for code, c in count.items():
+        if c > max_listed:
+            out.append(FitWarning(code, f"{c - max_listed} more '{code}' warnings not listed"))
+    return out
+
+
+def dropped_warning(t, drop):
+    """One warning per run of dropped poses."""
+    out = []
+    for a, b in _runs(drop, bridge=0):
+        out.append(FitWarning("outliers_dropped", f"{b - a} poses between {t[a]:.3f} s and {t[b - 1]:.3f} s "
+                              "dropped as a tracking glitch", float(t[a]), float(t[b - 1])))
+    return _merge(out)

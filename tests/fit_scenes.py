@@ -1,0 +1,76 @@
+"""Analytic inputs for the automatic fit: the lecture ellipse with white, coloured (AR(1), 30 ms)
+and upsampled (100 Hz interpolated to 200 Hz) pose noise, and a tracking glitch; exact truth."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from splineimu import fit, lie
+from splineimu.scenes import make_scene
+
+POS_NOISE_M = 1e-3
+ANGLE_NOISE_RAD = np.radians(0.1)
+_SCENES = {}
+
+
+def scene(duration_s):
+    if duration_s not in _SCENES:
+        _SCENES[duration_s] = make_scene("ellipse", duration_s=duration_s)
+    return _SCENES[duration_s]
+
+
+def noise(kind, n, rate_hz, sigma, rng):
+    """(n, 3) pose noise of standard deviation ``sigma`` per axis."""
+    if kind in ("white", "glitch"):
+        return sigma * rng.normal(size=(n, 3))
+    if kind == "ar1":  # correlation time 30 ms
+        rho = np.exp(-1.0 / (rate_hz * 0.03))
+        e = rng.normal(size=(n, 3)) * sigma * np.sqrt(1 - rho**2)
+        x = np.empty((n, 3))
+        x[0] = sigma * rng.normal(size=3)
+        for i in range(1, n):
+            x[i] = rho * x[i - 1] + e[i]
+        return x
+    if kind == "upsampled":  # noise drawn at half the rate, linearly interpolated
+        m = n // 2 + 2
+        c = sigma * rng.normal(size=(m, 3))
+        ti = np.arange(n) / 2.0
+        return np.column_stack([np.interp(ti, np.arange(m), c[:, j]) for j in range(3)])
+    if kind == "clean":
+        return np.zeros((n, 3))
+    raise ValueError(kind)
+
+
+def poses(kind, duration_s=60.0, rate_hz=200.0, seed=0):
+    """``(t, positions, quat_xyzw)``; the glitch moves 40 ms of poses by 5 cm at t = duration / 2."""
+    t = np.arange(0.0, duration_s + 1e-9, 1.0 / rate_hz)
+    k = scene(duration_s).kinematics(t)
+    rng = np.random.default_rng(seed)
+    p = k.position_world + noise(kind, t.size, rate_hz, POS_NOISE_M, rng)
+    R = k.world_R_body @ lie.so3_exp(noise(kind, t.size, rate_hz, ANGLE_NOISE_RAD, rng))
+    if kind == "glitch":
+        g = (t >= duration_s / 2) & (t < duration_s / 2 + 0.04)
+        p[g] += np.array([0.05, 0.0, 0.0])
+    return t, p, lie.matrix_to_quat_xyzw(R)
+
+
+def imu_errors(spl, duration_s, margin=1.0, exclude=None):
+    """RMS gyro [rad/s] and specific-force [m/s^2] errors on [margin, duration - margin] at 200 Hz,
+    optionally without the samples within ``exclude = (t, half_width)``."""
+    t = np.arange(margin, duration_s - margin, 0.005)
+    if exclude is not None:
+        t = t[np.abs(t - exclude[0]) > exclude[1]]
+    g, f = spl.imu(t)
+    g0, f0 = scene(duration_s).imu(t)
+
+    def rms(e):
+        return float(np.sqrt(np.mean(np.sum(e**2, axis=1))))
+
+    return rms(g - g0), rms(f - f0)
+
+
+def best_fixed(t, p, q, duration_s, settings, exclude=None):
+    """Best gyro and best accel error over fixed (order, spacing) settings (one spacing for both)."""
+    errs = [imu_errors(fit(t, p, q, order=k, knot_spacing_s=dt, reject_outliers=exclude is None), duration_s,
+                       exclude=exclude) for k, dt in settings]
+    return min(e[0] for e in errs), min(e[1] for e in errs)

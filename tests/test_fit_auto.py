@@ -1,0 +1,173 @@
+"""The automatic knot choice on analytic input with exact truth: white, coloured (AR(1), 30 ms)
+and upsampled pose noise, a tracking glitch, fast rotation, low-rate input, long input.
+
+Acceptance (issue 13): auto <= 1.15x the best fixed setting per quantity on white noise,
+<= 1.3x on coloured and upsampled noise; predicted / measured in [1/3, 3]; a 5 cm, 40 ms glitch
+dropped or warned with its time range and the accel elsewhere <= 1.3x the best.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from fit_scenes import best_fixed, imu_errors, poses
+
+from splineimu import fit, lie
+from splineimu.errors import InputError
+
+RATIO = {"white": 1.15, "ar1": 1.3, "upsampled": 1.3}
+
+
+def _around(rep, steps=(-2, -1, 0, 1, 2)):
+    """Fixed settings around the automatic choice: both grids' spacings, every order."""
+    out = set()
+    for dt in (rep.knot_spacing_s, rep.position_knot_spacing_s):
+        for k in (4, 5, 6):
+            for j in steps:
+                out.add((k, round(dt * 1.25**j, 6)))
+    return sorted(out)
+
+
+@pytest.mark.parametrize("kind", ["white", "ar1", "upsampled"])
+def test_auto_matches_the_best_fixed_setting(kind):
+    dur = 30.0
+    t, p, q = poses(kind, dur, seed=1)
+    spl, rep = fit(t, p, q, return_report=True)
+    eg, ea = imu_errors(spl, dur)
+    bg, ba = best_fixed(t, p, q, dur, _around(rep, (-1, 0, 1)))
+    assert eg <= RATIO[kind] * bg and ea <= RATIO[kind] * ba, (kind, eg / bg, ea / ba, rep.summary())
+    # predicted errors are credible: within a factor 3 of the measured ones
+    assert 1 / 3 <= rep.predicted_gyro_rms_rad_s / eg <= 3, (rep.predicted_gyro_rms_rad_s, eg)
+    assert 1 / 3 <= rep.predicted_accel_rms_m_s2 / ea <= 3, (rep.predicted_accel_rms_m_s2, ea)
+    assert rep.warnings == [], [w.message for w in rep.warnings]
+    assert rep.dropped_poses == []
+
+
+def test_prediction_is_stable_across_noise_seeds():
+    dur = 30.0
+    preds, meas = [], []
+    for seed in (2, 3, 4):
+        t, p, q = poses("white", dur, seed=seed)
+        spl, rep = fit(t, p, q, return_report=True)
+        preds.append((rep.predicted_gyro_rms_rad_s, rep.predicted_accel_rms_m_s2))
+        meas.append(imu_errors(spl, dur))
+    ratio = np.array(preds) / np.array(meas)
+    # measured: predicted / measured 0.57 .. 0.96 (gyro), 0.82 .. 1.03 (accel); predictions
+    # within 1.6x of each other (the old spectral floor moved 800x between seeds)
+    assert np.all((ratio > 1 / 3) & (ratio < 3)), ratio
+    preds = np.array(preds)
+    assert np.all(preds.max(axis=0) <= 2.0 * preds.min(axis=0)), preds
+
+
+def test_glitch_is_dropped_with_its_time_range():
+    dur = 30.0
+    t, p, q = poses("glitch", dur, seed=1)
+    spl, rep = fit(t, p, q, return_report=True)
+    glitch = np.flatnonzero((t >= 15.0) & (t < 15.04))
+    assert sorted(rep.dropped_poses) == glitch.tolist()
+    w = [w for w in rep.warnings if w.code == "outliers_dropped"]
+    assert len(w) == 1 and w[0].t_start_s == t[glitch[0]] and w[0].t_end_s == t[glitch[-1]]
+    assert rep.to_dict()["warnings"][0]["t_start_ns"] == int(round(t[glitch[0]] * 1e9))
+    # elsewhere as good as the best fixed setting on the same noise without the glitch
+    ea = imu_errors(spl, dur, exclude=(15.02, 1.0))[1]
+    tw, pw, qw = poses("white", dur, seed=1)
+    ba = best_fixed(tw, pw, qw, dur, _around(rep, (-1, 0, 1)), exclude=(15.02, 1.0))[1]
+    assert ea <= 1.3 * ba, (ea, ba)
+
+
+@pytest.mark.parametrize("deg", [60.0, 89.0])
+def test_fast_yaw_is_followed(deg):
+    t = np.arange(0, 5.0 + 1e-9, 0.01)
+    rate = np.radians(deg) / 0.01
+    q = np.c_[np.zeros((t.size, 2)), np.sin(rate * t / 2), np.cos(rate * t / 2)]
+    spl, rep = fit(t, np.zeros((t.size, 3)), q, return_report=True)
+    g = spl.imu(np.linspace(0.2, 4.8, 500))[0]
+    # measured: 2e-13 relative
+    np.testing.assert_allclose(g[:, 2], rate, rtol=1e-9)
+    assert rep.knot_spacing_s <= 0.0105
+
+
+def test_turns_that_cannot_be_told_apart_are_refused():
+    t = np.arange(0, 2.0 + 1e-9, 0.01)
+    yaw = np.radians(120.0) / 0.01 * t
+    q = np.c_[np.zeros((t.size, 2)), np.sin(yaw / 2), np.cos(yaw / 2)]
+    with pytest.raises(InputError, match="rotate by 120.0 deg"):
+        fit(t, np.zeros((t.size, 3)), q)
+
+
+def test_low_rate_input_gets_spacing_at_or_below_the_pose_spacing():
+    """20 Hz poses of smooth fast motion (as a re-estimated ground truth): the best spacing is at
+    or below the pose spacing, where the old 2x floor forbade it."""
+    dur = 30.0
+    t, p, q = poses("clean", dur, rate_hz=20.0)
+    spl, rep = fit(t, p, q, return_report=True)
+    assert rep.position_knot_spacing_s <= 0.05 and rep.knot_spacing_s <= 0.05, rep.summary()
+    eg, ea = imu_errors(spl, dur)
+    bg, ba = best_fixed(t, p, q, dur, [(k, dt) for k in (4, 6) for dt in (0.035, 0.05, 0.07, 0.1)])
+    # exact poses: both sit at 1e-8..1e-7 (measured gyro 7.3e-8 against 4.9e-8), far below any
+    # noise; the real 20 Hz pair (test_fit_real.py) checks the ratio where it matters
+    assert eg <= 1.15 * bg + 1e-6 and ea <= 1.15 * ba + 1e-5, (eg, bg, ea, ba)
+
+
+def test_separate_grids_are_reported():
+    t, p, q = poses("white", 20.0, seed=5)
+    spl, rep = fit(t, p, q, return_report=True)
+    d = rep.to_dict()
+    for key in ("order", "knot_spacing_s", "position_order", "position_knot_spacing_s", "predicted_gyro_rms_rad_s",
+                "predicted_accel_rms_m_s2", "warnings"):
+        assert key in d
+    # rotation is smoother than position on this scene
+    assert rep.knot_spacing_s > 1.5 * rep.position_knot_spacing_s, rep.summary()
+    assert spl.dt_s == rep.knot_spacing_s and spl.position_dt_s == rep.position_knot_spacing_s
+    # fixed settings for each grid
+    spl2 = fit(t, p, q, order=5, knot_spacing_s=0.5, position_order=6, position_knot_spacing_s=0.3)
+    assert (spl2.order, spl2.position_order) == (5, 6)
+    assert abs(spl2.dt_s - 0.5) < 0.01 and abs(spl2.position_dt_s - 0.3) < 0.01
+
+
+def test_no_warning_on_the_bundled_example():
+    path = Path(__file__).resolve().parent.parent / "examples" / "ellipse_mocap.tum"
+    a = np.loadtxt(path)
+    rep = fit(a[:, 0] - a[0, 0], a[:, 1:4], a[:, 4:8], return_report=True)[1]
+    assert rep.warnings == [], [w.message for w in rep.warnings]
+    assert rep.predicted_accel_rms_m_s2 < 0.1 and rep.predicted_gyro_rms_rad_s < 0.01
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("kind", ["white", "ar1", "upsampled"])
+def test_auto_against_the_full_grid(kind):
+    dur = 60.0
+    t, p, q = poses(kind, dur)
+    spl, rep = fit(t, p, q, return_report=True)
+    eg, ea = imu_errors(spl, dur)
+    grid = [(k, float(dt)) for k in (4, 5, 6) for dt in np.geomspace(0.02, 2.0, 21)]
+    bg, ba = best_fixed(t, p, q, dur, grid)
+    assert eg <= RATIO[kind] * bg and ea <= RATIO[kind] * ba, (kind, eg / bg, ea / ba)
+    assert 1 / 3 <= rep.predicted_gyro_rms_rad_s / eg <= 3
+    assert 1 / 3 <= rep.predicted_accel_rms_m_s2 / ea <= 3
+
+
+@pytest.mark.slow
+def test_one_hour_is_as_good_as_one_minute():
+    """Exact ellipse poses at 200 Hz. Both sit at the float64 rounding of the scene itself
+    (positions ~20 m evaluated at t up to 3600 s: ~5e-12 m), which the hour's accel shows."""
+    errs = {}
+    for dur in (60.0, 3600.0):
+        t, p, q = poses("clean", dur)
+        spl = fit(t, p, q)
+        errs[dur] = imu_errors(spl, dur)
+    # measured: gyro 7.0e-8 both; accel 6.4e-9 (1 min), 3.0e-8 (1 h)
+    assert errs[3600.0][0] <= 2 * errs[60.0][0] and errs[3600.0][1] <= 1e-7, errs
+
+
+def test_quaternion_noise_ignores_sign():
+    t, p, q = poses("white", 10.0, seed=6)
+    flips = np.where(np.random.default_rng(0).random(t.size) < 0.5, -1.0, 1.0)
+    a = fit(t, p, q)
+    b = fit(t, p, q * flips[:, None])
+    assert (a.dt_s, a.position_dt_s) == (b.dt_s, b.position_dt_s)
+    ti = np.linspace(1, 9, 200)
+    np.testing.assert_allclose(a.imu(ti)[0], b.imu(ti)[0], atol=1e-12)
+    assert lie is not None
