@@ -323,7 +323,8 @@ def _versions():
 
 
 def write_output(syn, out_dir, *, force=False, report: dict | None = None, bag: str | None = None,
-                 plot: bool = False, fit_data=None, progress: bool | None = None):
+                 plot: bool = False, fit_data=None, progress: bool | None = None,
+                 extra=None):
     """Write the EuRoC-like output folder atomically (DESIGN.md section 6).
 
     ``imu0/data.csv``, ``state_groundtruth_estimate0/data.csv`` (sensor pose, velocity and true
@@ -340,6 +341,9 @@ def write_output(syn, out_dir, *, force=False, report: dict | None = None, bag: 
     and written piece by piece, in bounded memory (bags and plots need the whole record and
     collect it first). ``progress`` shows a progress bar on stderr (default: for long
     records, when stderr is a terminal).
+
+    ``extra(tmp, report)``, when given, writes more files into the temporary folder (and may
+    add to the report) just before ``report.json``: they appear atomically with the rest.
     """
     from .io.euroc import EUROC_GROUNDTRUTH_HEADER, EUROC_IMU_HEADER
     from .io.output import OutputFolder, TableWriter
@@ -440,6 +444,8 @@ def write_output(syn, out_dir, *, force=False, report: dict | None = None, bag: 
                 plot_fit_residuals(*fit_data, tmp / "fit_residuals.png")
                 plots.append("fit_residuals.png")
             out_report["plots"] = plots
+        if extra is not None:
+            extra(tmp, out_report)
         (tmp / "report.json").write_text(json.dumps(out_report, indent=2, default=_json_default) + "\n")
     return out_report
 

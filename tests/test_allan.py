@@ -384,8 +384,8 @@ def test_small_nnls_and_chi2_quantiles_match_scipy():
         ref, _ = nnls(A, b)
         x = _nnls(A, b)
         assert np.all(x >= 0.0)
-        assert np.linalg.norm(A @ x - b) <= np.linalg.norm(A @ ref - b) * (1 + 1e-12) + 1e-14
+        assert np.linalg.norm(A @ x - b) <= np.linalg.norm(A @ ref - b) * (1 + 1e-10) + 1e-14  # scipy < 1.15: 1.2e-11
         np.testing.assert_allclose(x, ref, rtol=1e-8, atol=1e-12 * np.abs(ref).max())
     nu = np.array([0.3, 1.0, 2.5, 17.0, 1e3, 1e6])
     for q in (0.025, 0.975):
-        np.testing.assert_allclose(_chi2_ppf(q, nu), chi2.ppf(q, nu), rtol=1e-12)
+        np.testing.assert_allclose(_chi2_ppf(q, nu), chi2.ppf(q, nu), rtol=1e-10)  # scipy 1.13-1.14 differ by 1.2e-11

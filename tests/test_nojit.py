@@ -1,6 +1,7 @@
 """The pure-Python path (NUMBA_DISABLE_JIT=1) must agree with the compiled one.
 
-The Lie, spline and scene suites and the fit Jacobian checks run again in a subprocess with
+The Lie, spline and scene suites, the fit Jacobian checks and the doctests of the Lie and spline
+modules (collected by ``--doctest-modules`` in pyproject's addopts) run again in a subprocess with
 numba's jit disabled (a few seconds); the whole suite that way is behind ``-m slow``.
 """
 
@@ -26,9 +27,10 @@ def _run(args, timeout):
 def test_core_suites_without_jit():
     _run(["tests/test_lie.py", "tests/test_spline.py", "tests/test_spline_imu_kernel.py", "tests/test_scenes.py",
           "tests/test_fit.py::test_rotation_gradient_matches_finite_differences",
-          "tests/test_fit.py::test_se3_gradient_matches_finite_differences"], timeout=900)
+          "tests/test_fit.py::test_se3_gradient_matches_finite_differences",
+          "splineimu/lie.py", "splineimu/spline"], timeout=900)
 
 
 @pytest.mark.slow
 def test_whole_suite_without_jit():
-    _run(["tests", "--deselect", "tests/test_nojit.py"], timeout=5400)
+    _run(["tests", "splineimu", "--deselect", "tests/test_nojit.py"], timeout=5400)

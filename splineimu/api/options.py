@@ -477,13 +477,26 @@ class SynthesisJob:
     motion : PosesInput or SceneInput
     imu : ImuOptions
     output : OutputOptions
+    cameras : dict, optional
+        Cameras observing landmarks on the same motion: name -> :class:`~splineimu.camera.Camera`,
+        or a scene file's ``cameras:`` value (:func:`splineimu.camera.cameras_from_config`).
+    landmarks : Landmarks or dict, optional
+        Needed with cameras: ``{file: points.csv}`` or ``{random: {count: N, ...}}``
+        (:func:`splineimu.camera.landmarks_from_config`; drawn from the run's seed).
     """
 
     motion: PosesInput | SceneInput
     imu: ImuOptions = field(default_factory=ImuOptions)
     output: OutputOptions = field(default_factory=OutputOptions)
+    cameras: object = None
+    landmarks: object = None
+    origin: Origin | None = _origin_field()
 
     def __post_init__(self):
+        if self.cameras is not None or self.landmarks is not None:
+            from .cameras import check_cameras
+
+            check_cameras(self)
         if not isinstance(self.motion, (PosesInput, SceneInput)):
             raise ConfigError(f"`motion` must be PosesInput or SceneInput, got {type(self.motion).__name__}")
         if not isinstance(self.imu, ImuOptions) or not isinstance(self.output, OutputOptions):
@@ -500,7 +513,15 @@ class SynthesisJob:
 
         Only values that differ from the defaults are written; inline mappings (an IMU model
         or extrinsic given in a scene file) are written as YAML flow text.
+
+        Raises
+        ------
+        ConfigError
+            The job has cameras: they have no flags (scene files only).
         """
+        if self.cameras is not None:
+            raise ConfigError("cameras are only available from scene files: no command line gives this job",
+                              option="cameras")
         m = self.motion
         if isinstance(m, PosesInput):
             argv = ["from-tum" if m.format == "tum" else "from-euroc", m.path]

@@ -31,6 +31,9 @@
       plot: true
       force: false
       tum: poses.tum              # scenes only: their poses at the IMU rate
+    cameras: {cam0: {...}}        # optional: Kalibr camchain keys per camera, or {file: camchain.yaml}
+    landmarks: {random: {count: 1500, shape: shell}}   # with cameras; or {file: points.csv}
+                                  # (keys and files: splineimu.camera.config)
     vary:                         # optional: Monte-Carlo batches (splineimu.api.variants)
       imu.model.gyroscope_noise_density: {normal: [1.8e-4, 2.0e-5]}
 
@@ -62,7 +65,7 @@ from .options import ImuOptions, OutputOptions, PosesInput, SceneInput, SplineOp
 
 #: Keys of each section (the file's structure).
 KEYS = {
-    (): ("motion", "imu", "seed", "output", "vary"),
+    (): ("motion", "imu", "seed", "output", "cameras", "landmarks", "vary"),
     ("motion",): ("scene", "duration_s", "t0_ns", "params", "poses", "format", "spline", "gaps", "max_gap_s",
                   "repeated_stamps"),
     ("motion", "spline"): ("kind", "order", "knot_spacing_s", "smoothness", "keep_outliers"),
@@ -175,8 +178,11 @@ def job_from_document(doc, base) -> SynthesisJob:
                       extra={"seed": ("seed",)})
     output = _build(OutputOptions, doc, out, ("output",), ("dir", "force", "bag", "plot", "tum"))
     try:
-        return SynthesisJob(source, imu_opts, output)
+        return SynthesisJob(source, imu_opts, output, cameras=top.get("cameras"), landmarks=top.get("landmarks"),
+                            origin=YamlOrigin(doc, {"cameras": ("cameras",), "landmarks": ("landmarks",)}))
     except ConfigError as exc:
+        if exc.path is not None:  # cameras and landmarks: at their file and line already
+            raise
         raise ConfigError(exc.problem, path=doc.name, option=exc.option) from None
 
 

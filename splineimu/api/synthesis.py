@@ -58,6 +58,10 @@ class SynthesisResult:
         The arrays, from :func:`synthesize_to_memory`.
     pieces : list of SynthesisResult
         One per piece when a pose file was split at its gaps (``gaps="split"``).
+    observations : dict or None
+        Jobs with cameras: name -> :class:`~splineimu.camera.Observations`.
+    landmarks : Landmarks or None
+        Jobs with cameras: the landmarks observed.
     """
 
     job: SynthesisJob
@@ -69,6 +73,8 @@ class SynthesisResult:
     source: object = None
     synthesis: object = None
     pieces: list = field(default_factory=list)
+    observations: dict | None = None
+    landmarks: object = None
 
 
 @dataclass
@@ -225,7 +231,8 @@ def _seed(job):
     imu = job.imu
     timing = imu.timing
     random_timing = timing is not None and (timing.stamp_noise_s > 0 or timing.drop_probability > 0)
-    if imu.seed is not None or not (imu.imu_config is not None or random_timing or imu.vibration is not None):
+    if imu.seed is not None or not (imu.imu_config is not None or random_timing or imu.vibration is not None
+                                     or job.cameras is not None):
         return imu.seed
     return int(np.random.SeedSequence().entropy % (2**63))
 
@@ -266,9 +273,20 @@ def _synthesize(job, source, t_ns, seed, out_dir, report, write, result, force=N
     syn = synthesize_stream(source, t_ns, gravity=imu.gravity, extrinsic=imu.body_T_sensor,
                             imu_config=imu.imu_config, seed=seed, sampling=imu.sampling,
                             with_increments=imu.increments, vibration=imu.vibration)
+    extra = None
+    if job.cameras is not None:
+        from .cameras import observe_job, write_job_cameras
+
+        result.landmarks, result.observations, cam_report = observe_job(job, source, seed)
+        report = {**report, **cam_report}
+
+        def extra(tmp, out_report):  # the camera files, inside the same atomic output folder
+            plots = write_job_cameras(tmp, result.landmarks, result.observations, plot=job.output.plot)
+            if plots:
+                out_report["plots"] = out_report.get("plots", []) + plots
     if write:
         result.report = write_output(syn, out_dir, force=job.output.force if force is None else force, report=report,
-                                     bag=job.output.bag, plot=job.output.plot, fit_data=fit_data)
+                                     bag=job.output.bag, plot=job.output.plot, fit_data=fit_data, extra=extra)
         result.out_dir = Path(out_dir)
     else:
         result.synthesis = syn.collect()
@@ -299,6 +317,7 @@ def synthesize_scene(job: SynthesisJob, *, echo=None, write: bool = True, prepar
     _synthesize(job, scene, t_ns, seed, job.output.dir, scene_report(scene, job), write, result)
     log.line(f"scene         {m.name}, {scene.t_max_s:g} s")
     log.line(imu_line(getattr(t_ns, "stamp_ns", t_ns), job, seed))
+    _camera_line(result, log)
     if write:
         log.line(f"written       {job.output.dir}  ({time.perf_counter() - t_wall:.2f} s)")
     return result
@@ -427,7 +446,15 @@ def _one(job, piece, out_dir, gaps, max_gap, write, result, log):
         for text in fit_lines(rep, gaps, max_gap):
             log.line(text)
         log.line(imu_line(getattr(t_ns, "stamp_ns", t_ns), job, seed, detailed=True))
+        _camera_line(result, log)
     return result
+
+
+def _camera_line(result, log):
+    if result.observations is not None:
+        from .cameras import camera_line
+
+        log.line(camera_line(result.report))
 
 
 def _fit_residuals(spl, t_s, track):
