@@ -6,7 +6,7 @@
 The scene is the acceptance scene of issue 17: the ellipse, 20 s at 200 Hz, adis16448 with two
 varied noise densities. Figures, all from this one script run:
 
-- runs/s in steady state (:attr:`splineimu.batch.runner.BatchResult.time_per_run_s`: once every
+- runs/s in steady state (:attr:`splineimu.api.batch.BatchResult.time_per_run_s`: once every
   worker has completed its first run) of a local cluster of 1 and of 2 worker processes,
   measured alternately ``--repeat`` times so that a change in the machine's load hits both;
 - the wall time of one ``splineimu run SCENE --run-index k`` process per run (what a shell loop
@@ -47,7 +47,7 @@ def _load() -> str:
 
 
 def _batch(scene, runs, workers, tmp) -> float:
-    from splineimu.batch.runner import run_batch
+    from splineimu.api.batch import run_batch
 
     out = Path(tempfile.mkdtemp(dir=tmp)) / "mc"
     res = run_batch(scene, runs, out, workers=workers, progress=False)

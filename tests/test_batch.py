@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from splineimu.batch.runner import run_batch, run_name
+from splineimu.api.batch import run_batch, run_name
 from splineimu.cli import main
 from splineimu.errors import ConfigError, OutputExistsError
 
@@ -217,7 +217,7 @@ def test_pose_file_batch_fits_once_and_matches_run_index(tmp_path, one_worker):
                      "seed: 7\noutput: {dir: out}\n"
                      "vary:\n  imu.extrinsic.translation.1: {choice: [0.0, 0.05]}\n"
                      "  imu.model.accelerometer_random_walk: {uniform: [1.0e-4, 2.0e-4]}\n")
-    from splineimu.api.variants import SceneFile
+    from splineimu.api.scenefile import SceneFile
 
     sf = SceneFile.read(scene)
     assert not sf.varies_motion

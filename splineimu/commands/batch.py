@@ -50,7 +50,7 @@ def add_arguments(p):
 def run(args) -> int:
     import sys
 
-    from ..batch.runner import run_batch
+    from ..api.batch import run_batch
     from ._common import say
 
     if args.workers is not None and args.scheduler:

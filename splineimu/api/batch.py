@@ -3,7 +3,7 @@
 :func:`run_batch` reads the scene file (its ``vary:`` block checked before any work), makes the
 motion once (a pose file is read and fitted in this process; the spline is shipped to every
 worker once), and runs each run ``k`` on a worker: the job of
-:meth:`splineimu.api.variants.SceneFile.job` written to ``OUT/runs/NNNNN`` (five digits), the
+:meth:`splineimu.api.scenefile.SceneFile.job` written to ``OUT/runs/NNNNN`` (five digits), the
 same bytes ``splineimu run SCENE.yaml --run-index k`` writes. Each run folder appears atomically
 (temporary folder, then rename), so a killed batch leaves only complete runs and ``resume`` runs
 only the missing ones. ``OUT/runs.csv`` lists every run: index, seed, the drawn values at full
@@ -108,8 +108,8 @@ def run_one(k: int, scene, runs_dir: str, prepared=None) -> dict:
     Returns ``{"run", "status", "error", "time_s"}``; errors of the run are returned, not raised
     (a worker that dies is handled by Dask, which runs the task again elsewhere).
     """
-    from ..api.synthesis import run_job
     from ..errors import OutputExistsError, SplineImuError
+    from .synthesis import run_job
 
     t0 = time.perf_counter()
     out = Path(runs_dir) / run_name(k)
@@ -188,7 +188,7 @@ def run_batch(scene_file, runs: int, out_dir, *, workers: int | None = None, sch
     ----------
     scene_file : str or os.PathLike
         A scene file with a ``seed`` and, usually, a ``vary:`` block
-        (:mod:`splineimu.api.variants`).
+        (:class:`splineimu.api.scenefile.SceneFile`).
     runs : int
         Runs ``0 .. runs - 1``.
     out_dir : str or os.PathLike
@@ -221,11 +221,11 @@ def run_batch(scene_file, runs: int, out_dir, *, workers: int | None = None, sch
     """
     import shutil
 
-    from ..api.synthesis import prepare_motion
-    from ..api.variants import SceneFile
+    from ..batch.cluster import dask_client, map_runs
     from ..io.output import atomic_write_text
     from ..validation import int_in_range
-    from .cluster import dask_client, map_runs
+    from .scenefile import SceneFile
+    from .synthesis import prepare_motion
 
     t_wall = time.perf_counter()
     runs = int_in_range(runs, "--runs", 1, 10**RUN_DIGITS)
