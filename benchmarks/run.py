@@ -48,6 +48,7 @@ def main(argv=None):
         ("Accuracy against cost: order, knot spacing, sampling, integration", ["benchmarks/bench_tradeoffs.py"], []),
         ("Allan deviation against allantools", ["benchmarks/bench_allan.py"], q),
         ("Preintegration throughput", ["benchmarks/bench_preintegration.py"], q),
+        ("Monte-Carlo batches: workers and one process per run", ["benchmarks/bench_batch.py"], q),
     ):
         text, rc = _run(title, cmd, quick)
         bad += rc != 0

@@ -8,6 +8,8 @@ build a :class:`~splineimu.api.options.SynthesisJob` and call :func:`run_job`.
 - :func:`synthesize_scene`: the same from an analytic scene (exact derivatives).
 - :func:`run_job`: either, by the job's motion input.
 - :func:`synthesize_to_memory`: the same work without files; the arrays are in the result.
+- :func:`prepare_motion`: the motion part alone (pose file read and fitted, or the scene made),
+  to be passed as ``prepared=`` to many runs that differ only in their IMU (Monte-Carlo batches).
 
 Examples
 --------
@@ -75,6 +77,39 @@ class SynthesisResult:
     landmarks: object = None
 
 
+@dataclass
+class PreparedMotion:
+    """A job's motion made ready once for many runs: the scene, or the pose file read and fitted.
+
+    Made by :func:`prepare_motion`; runs that share it (``run_job(job, prepared=...)``) must have
+    the same motion options. It is not modified by the runs, so one copy may serve many.
+
+    Attributes
+    ----------
+    motion : PosesInput or SceneInput
+        The options it was made from.
+    scene : Scene or None
+        The analytic scene (scene inputs).
+    track : PoseTrack or None
+        The pose file's content (pose inputs).
+    gaps : list
+        Gaps longer than ``max_gap_s`` (bridged, or where the file was split).
+    max_gap_s : float or None
+    pieces : list of (track, spline, fit_report)
+        One fitted spline per piece (one piece unless ``gaps="split"``).
+    split : bool
+        Whether the pose file was split at its gaps.
+    """
+
+    motion: object
+    scene: object = None
+    track: object = None
+    gaps: list = field(default_factory=list)
+    max_gap_s: float | None = None
+    pieces: list = field(default_factory=list)
+    split: bool = False
+
+
 class _Log:
     def __init__(self, result, echo):
         self.result = result
@@ -91,7 +126,8 @@ class _Log:
             self.echo(text, True)
 
 
-def run_job(job: SynthesisJob, *, echo=None, write: bool = True) -> SynthesisResult:
+def run_job(job: SynthesisJob, *, echo=None, write: bool = True, prepared: PreparedMotion | None = None
+            ) -> SynthesisResult:
     """Run a synthesis job: :func:`synthesize_poses` or :func:`synthesize_scene` by its motion input.
 
     Parameters
@@ -103,6 +139,9 @@ def run_job(job: SynthesisJob, *, echo=None, write: bool = True) -> SynthesisRes
     write : bool
         Write the output folder (``job.output.dir``); without it the arrays are kept in
         :attr:`SynthesisResult.synthesis` and nothing is written.
+    prepared : PreparedMotion, optional
+        The motion of ``job`` already made by :func:`prepare_motion` (it is then neither read
+        nor fitted again).
 
     Returns
     -------
@@ -114,8 +153,51 @@ def run_job(job: SynthesisJob, *, echo=None, write: bool = True) -> SynthesisRes
         Bad input file or options; an output folder that exists (without ``force``).
     """
     if isinstance(job.motion, PosesInput):
-        return synthesize_poses(job, echo=echo, write=write)
-    return synthesize_scene(job, echo=echo, write=write)
+        return synthesize_poses(job, echo=echo, write=write, prepared=prepared)
+    return synthesize_scene(job, echo=echo, write=write, prepared=prepared)
+
+
+def prepare_motion(job: SynthesisJob, *, echo=None) -> PreparedMotion:
+    """The motion of ``job`` made once: the scene built, or the pose file read, checked and fitted.
+
+    Parameters
+    ----------
+    job : SynthesisJob
+        Only its motion options are used.
+    echo : callable, optional
+        As in :func:`run_job` (the input summary and fit notices).
+
+    Returns
+    -------
+    PreparedMotion
+        To be passed as ``prepared=`` to :func:`run_job` for any job with the same motion.
+
+    Raises
+    ------
+    InputError, ConfigError
+        As :func:`run_job`.
+
+    Examples
+    --------
+    >>> from splineimu.api import ImuOptions, SceneInput, SynthesisJob
+    >>> job = SynthesisJob(SceneInput("static", duration_s=1.0), ImuOptions(rate_hz=10))
+    >>> prep = prepare_motion(job)
+    >>> run_job(job, write=False, prepared=prep).synthesis.t_ns.size
+    11
+    """
+    log = _Log(SynthesisResult(job), echo)
+    if isinstance(job.motion, PosesInput):
+        return _prepare_poses(job, log)
+    from .. import scenes
+
+    m = job.motion
+    return PreparedMotion(m, scene=scenes.make_scene(m.name, duration_s=m.duration_s, t0_ns=m.t0_ns, **m.params))
+
+
+def _prepared(job, prepared):
+    if prepared is not None and prepared.motion != job.motion:
+        raise ConfigError("the prepared motion was made from other motion options than this job's")
+    return prepared
 
 
 def synthesize_to_memory(job: SynthesisJob) -> SynthesisResult:
@@ -239,7 +321,8 @@ def _synthesize(job, source, t_ns, seed, out_dir, report, write, result, force=N
     return result
 
 
-def synthesize_scene(job: SynthesisJob, *, echo=None, write: bool = True) -> SynthesisResult:
+def synthesize_scene(job: SynthesisJob, *, echo=None, write: bool = True, prepared: PreparedMotion | None = None
+                     ) -> SynthesisResult:
     """IMU data from an analytic scene (exact derivatives); parameters as :func:`run_job`.
 
     With ``job.output.tum`` the scene's poses at the IMU rate are also written as a TUM file.
@@ -248,7 +331,8 @@ def synthesize_scene(job: SynthesisJob, *, echo=None, write: bool = True) -> Syn
 
     t_wall, result, log = _start(job, SceneInput, echo, write)
     m = job.motion
-    scene = scenes.make_scene(m.name, duration_s=m.duration_s, t0_ns=m.t0_ns, **m.params)
+    prepared = _prepared(job, prepared)
+    scene = prepared.scene if prepared is not None else prepare_motion(job).scene
     result.source = scene
     if write and job.output.tum:
         _fits(job, int(scene.t_max_s * job.imu.rate_hz) + 1, False, tum=True)
@@ -267,7 +351,8 @@ def synthesize_scene(job: SynthesisJob, *, echo=None, write: bool = True) -> Syn
     return result
 
 
-def synthesize_poses(job: SynthesisJob, *, echo=None, write: bool = True) -> SynthesisResult:
+def synthesize_poses(job: SynthesisJob, *, echo=None, write: bool = True, prepared: PreparedMotion | None = None
+                     ) -> SynthesisResult:
     """IMU data from a pose file through a fitted spline; parameters as :func:`run_job`.
 
     Gaps longer than ``max_gap_s`` stop the job (``gaps="error"``), are fitted through
@@ -275,9 +360,38 @@ def synthesize_poses(job: SynthesisJob, *, echo=None, write: bool = True) -> Syn
     inside the output folder (``"split"``; pieces of fewer than :data:`MIN_PIECE_POSES` poses
     are skipped). The result of each piece is in :attr:`SynthesisResult.pieces`.
     """
+    t_wall, result, log = _start(job, PosesInput, echo, write)
+    prep = _prepared(job, prepared) or _prepare_poses(job, log)
+    gaps, max_gap = prep.gaps, prep.max_gap_s
+    if not prep.split:
+        _one(job, prep.pieces[0], job.output.dir, gaps, max_gap, write, result, log)
+        if write:
+            log.line(f"written       {job.output.dir}  ({time.perf_counter() - t_wall:.2f} s)")
+        return result
+    if not write:
+        for piece in prep.pieces:
+            result.pieces.append(_one(job, piece, None, [], max_gap, False, SynthesisResult(job), None))
+        return result
+    from ..io.files import OutputFolder
+
+    with OutputFolder(job.output.dir, force=job.output.force) as tmp:
+        for i, piece in enumerate(prep.pieces):
+            sub = tmp / f"part_{i:03d}"
+            track = piece[0]
+            log.line(f"piece {i}       {track.t_ns.size} poses from {track.t_ns[0]} ns -> {sub.name}")
+            res = _one(job, piece, sub, [], max_gap, True, SynthesisResult(job), None)
+            res.out_dir = Path(job.output.dir) / sub.name
+            result.pieces.append(res)
+    result.out_dir = Path(job.output.dir)
+    result.report = result.pieces[0].report
+    log.line(f"written       {job.output.dir} ({len(prep.pieces)} pieces, {time.perf_counter() - t_wall:.2f} s)")
+    return result
+
+
+def _prepare_poses(job, log) -> PreparedMotion:
+    """Read the pose file, check its gaps, split it if asked, fit one spline per piece."""
     from ..io.poses import find_gaps, split_at_gaps
 
-    t_wall, result, log = _start(job, PosesInput, echo, write)
     m = job.motion
     track = _read(m)
     for note in track.notices:
@@ -294,11 +408,10 @@ def synthesize_poses(job: SynthesisJob, *, echo=None, write: bool = True) -> Syn
             path=m.path, line=g.line)
     log.line(f"input         {m.path}: {track.t_ns.size} poses, {(track.t_ns[-1] - track.t_ns[0]) / 1e9:.3f} s, "
              f"median spacing {med * 1e3:.3f} ms")
-    if not (gaps and m.gaps == "split"):
-        _one(job, track, job.output.dir, gaps, max_gap, write, result, log)
-        if write:
-            log.line(f"written       {job.output.dir}  ({time.perf_counter() - t_wall:.2f} s)")
-        return result
+    prep = PreparedMotion(m, track=track, gaps=gaps, max_gap_s=max_gap, split=bool(gaps and m.gaps == "split"))
+    if not prep.split:
+        prep.pieces.append((track, *_fit(job, track, log)))
+        return prep
     pieces = split_at_gaps(track, gaps)
     short = [p for p in pieces if p.t_ns.size < MIN_PIECE_POSES]
     pieces = [p for p in pieces if p.t_ns.size >= MIN_PIECE_POSES]
@@ -307,23 +420,8 @@ def synthesize_poses(job: SynthesisJob, *, echo=None, write: bool = True) -> Syn
                  f"({sum(p.t_ns.size for p in short)} poses)")
     if not pieces:
         raise InputError(f"no piece between gaps has {MIN_PIECE_POSES} poses or more", path=m.path)
-    if not write:
-        for piece in pieces:
-            result.pieces.append(_one(job, piece, None, [], max_gap, False, SynthesisResult(job), None))
-        return result
-    from ..io.files import OutputFolder
-
-    with OutputFolder(job.output.dir, force=job.output.force) as tmp:
-        for i, piece in enumerate(pieces):
-            sub = tmp / f"part_{i:03d}"
-            log.line(f"piece {i}       {piece.t_ns.size} poses from {piece.t_ns[0]} ns -> {sub.name}")
-            res = _one(job, piece, sub, [], max_gap, True, SynthesisResult(job), None)
-            res.out_dir = Path(job.output.dir) / sub.name
-            result.pieces.append(res)
-    result.out_dir = Path(job.output.dir)
-    result.report = result.pieces[0].report
-    log.line(f"written       {job.output.dir} ({len(pieces)} pieces, {time.perf_counter() - t_wall:.2f} s)")
-    return result
+    prep.pieces = [(p, *_fit(job, p, _Log(SynthesisResult(job), None))) for p in pieces]
+    return prep
 
 
 def _read(m: PosesInput):
@@ -336,12 +434,10 @@ def _read(m: PosesInput):
     return read_euroc_groundtruth(m.path, repeated_stamps=m.repeated_stamps)
 
 
-def _one(job, track, out_dir, gaps, max_gap, write, result, log):
-    """Fit, stamps, synthesis and output of one piece of a pose file (``log`` None: quiet)."""
+def _fit(job, track, log):
+    """The spline of one piece of a pose file and its fit report (dropped poses with their lines)."""
     from ..spline.fit import fit
 
-    quiet = log is None
-    log = log or _Log(result, None)
     sp = job.motion.spline
     origin = int(track.t_ns[0])
     t_s = (track.t_ns - origin).astype(np.float64) / 1e9
@@ -349,7 +445,6 @@ def _one(job, track, out_dir, gaps, max_gap, write, result, log):
     spl, rep = fit(t_s, track.positions, track.quat_xyzw, kind=sp.kind, order=sp.order,
                    knot_spacing_s=sp.knot_spacing_s, **smooth, origin_ns=origin,
                    reject_outliers=not sp.keep_outliers, progress=track.t_ns.size > 100_000, return_report=True)
-    result.source, result.fit_report = spl, rep
     for w in fit_warnings(rep):  # also in report.json and in the fit summary
         log.note(f"warning: {w['message']}")
     if rep.dropped_poses:
@@ -359,8 +454,18 @@ def _one(job, track, out_dir, gaps, max_gap, write, result, log):
                              for i, w in zip(rep.dropped_poses, where)]
         log.line(f"outliers      {len(where)} poses dropped (lines {', '.join(map(str, where[:8]))}"
                  f"{', ...' if len(where) > 8 else ''}); --keep-outliers keeps them")
+    return spl, rep
+
+
+def _one(job, piece, out_dir, gaps, max_gap, write, result, log):
+    """Stamps, synthesis and output of one fitted piece ``(track, spline, fit_report)`` (``log`` None: quiet)."""
+    quiet = log is None
+    log = log or _Log(result, None)
+    track, spl, rep = piece
+    result.source, result.fit_report = spl, rep
     seed = _seed(job)
     t_ns = _stamps(job, int(track.t_ns[0]), int(track.t_ns[-1]), log, seed, write)
+    t_s = (track.t_ns - int(track.t_ns[0])).astype(np.float64) / 1e9
     fit_data = _fit_residuals(spl, t_s, track) if (write and job.output.plot) else None
     report = poses_report(job, track, rep, gaps, max_gap)
     _synthesize(job, spl, t_ns, seed, out_dir, report, write, result, force=job.output.force if not quiet else False,
@@ -389,5 +494,6 @@ def _fit_residuals(spl, t_s, track):
     return t_s, track.positions - p_fit, ang
 
 
-__all__ = ["SynthesisResult", "run_job", "synthesize_poses", "synthesize_scene", "synthesize_to_memory",
+__all__ = ["SynthesisResult", "PreparedMotion", "prepare_motion", "run_job",
+           "synthesize_poses", "synthesize_scene", "synthesize_to_memory",
            "MIN_PIECE_POSES"]

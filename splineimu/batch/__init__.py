@@ -1,1 +1,2 @@
-"""Monte-Carlo batches: seeded variants of one scene on a Dask cluster."""
+"""Monte-Carlo batches: the ``vary:`` block and its draws (:mod:`splineimu.batch.vary`) and the Dask
+plumbing (:mod:`splineimu.batch.cluster`); the job itself is :func:`splineimu.api.batch.run_batch`."""

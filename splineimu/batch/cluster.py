@@ -78,13 +78,18 @@ def map_runs(client, fn, indices, *args, progress: bool = True, on_result=None):
     spline travel once per worker, not once per run. ``on_result(result)`` is called in the
     order of completion. ``fn`` should return a mapping with ``run`` and ``status``; a task lost
     with its workers more often than its retries allow is reported as such a mapping with status
-    ``failed``. Returns the results and the steady-state time per run (wall time
-    between the first and the last completion divided by the runs completed in between).
+    ``failed``. Returns the results and the steady-state time per run: once every worker has
+    completed its first run (which pays imports, compilation or cache loading), the wall time
+    to the last completion divided by the runs completed in between (None when too few runs).
     """
+    import uuid
+
     from distributed import as_completed
 
-    shared = [client.scatter(a, broadcast=True) for a in args]
-    futures = {client.submit(fn, k, *shared, key=f"splineimu-run-{k}", pure=False, retries=2): k for k in indices}
+    shared = [a if a is None else client.scatter(a, broadcast=True) for a in args]
+    token = uuid.uuid4().hex[:12]  # batches sharing a scheduler must not share task keys
+    futures = {client.submit(fn, k, *shared, key=f"splineimu-run-{token}-{k}", pure=False, retries=2): k
+               for k in indices}
     bar = None
     if progress:
         from tqdm.auto import tqdm
@@ -106,7 +111,8 @@ def map_runs(client, fn, indices, *args, progress: bool = True, on_result=None):
     finally:
         if bar is not None:
             bar.close()
-    steady = (stamps[-1] - stamps[0]) / (len(stamps) - 1) if len(stamps) > 2 else None
+    first = min(max(len(client.nthreads()), 1), len(stamps)) - 1  # every worker past its first run
+    steady = (stamps[-1] - stamps[first]) / (len(stamps) - 1 - first) if len(stamps) - first > 2 else None
     return results, steady
 
 

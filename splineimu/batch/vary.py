@@ -135,29 +135,53 @@ def nominal_values(vary: dict) -> dict:
     return {key: dist.nominal() for key, dist in vary.items()}
 
 
+def _child(node, part):
+    """``node[part]`` of a mapping, or of a list when ``part`` is an index; None if absent."""
+    if isinstance(node, dict):
+        return node.get(part)
+    if isinstance(node, list) and part.isdigit() and int(part) < len(node):
+        return node[int(part)]
+    return None
+
+
 def set_dotted(data: dict, key: str, value, expand=None) -> None:
     """Set ``data[a][b][c] = value`` for ``key = "a.b.c"`` in a scene-file mapping (in place).
 
-    Intermediate mappings must exist, except where ``expand(path_so_far, current_value)`` turns
-    a scalar into a mapping (e.g. an IMU preset name into its keys) or returns ``{}`` for an
-    absent optional block; it returns ``None`` where the path is not part of the scene format.
+    A part that is a number indexes a list (``imu.extrinsic.translation.0``). Intermediate
+    mappings must exist, except where ``expand(path_so_far, current_value)`` turns a scalar
+    into a mapping (e.g. an IMU preset name into its keys) or returns ``{}`` for an absent
+    optional block (or the default list of an absent vector); it returns ``None`` where the
+    path is not part of the scene format.
 
     Raises
     ------
     KeyError
         With the first part of ``key`` that does not exist.
+
+    Examples
+    --------
+    >>> d = {"imu": {"extrinsic": {"translation": [0.1, 0.0, 0.0]}}}
+    >>> set_dotted(d, "imu.extrinsic.translation.2", 0.5)
+    >>> d["imu"]["extrinsic"]["translation"]
+    [0.1, 0.0, 0.5]
     """
     parts = key.split(".")
     node = data
     for i, part in enumerate(parts[:-1]):
-        nxt = node.get(part) if isinstance(node, dict) else None
-        if not isinstance(nxt, dict):
-            nxt = expand(".".join(parts[: i + 1]), nxt) if expand is not None else None
-            if not isinstance(nxt, dict):
+        nxt = _child(node, part)
+        if not isinstance(nxt, (dict, list)):
+            nxt = expand(".".join(parts[: i + 1]), nxt) if expand is not None and isinstance(node, dict) else None
+            if not isinstance(nxt, (dict, list)):
                 raise KeyError(".".join(parts[: i + 1]))
             node[part] = nxt
         node = nxt
-    node[parts[-1]] = value
+    last = parts[-1]
+    if isinstance(node, list):
+        if _child(node, last) is None:
+            raise KeyError(key)
+        node[int(last)] = value
+    else:
+        node[last] = value
 
 
 __all__ = ["Distribution", "parse_vary", "run_seed", "draws_for_run", "nominal_values", "set_dotted", "KINDS"]

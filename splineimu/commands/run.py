@@ -19,6 +19,11 @@ same output bytes.
 examples:
   splineimu run examples/ellipse_scene.yaml
   splineimu run examples/ellipse_scene.yaml --print    show the equivalent command line
+  splineimu run examples/batch_scene.yaml --run-index 7 -o run7
+                                   run 7 of `splineimu batch` alone (the same bytes as OUT/runs/00007)
+
+A `vary:` block (see `splineimu batch --help`) is used at its nominal values (mean, midpoint,
+first choice) unless --run-index picks a run's draws and seed.
 """
 
 
@@ -26,6 +31,9 @@ def add_arguments(p):
     p.add_argument("scene_file", metavar="SCENE.yaml")
     p.add_argument("--print", action="store_true", help="print the equivalent command line and exit")
     p.add_argument("--force", action="store_true", help="replace an existing output folder")
+    p.add_argument("-o", "--out", metavar="DIR", help="output folder instead of the file's output.dir")
+    p.add_argument("--run-index", type=int, metavar="K",
+                   help="run K of a batch over the file's vary: block (its draws and seed; no output.tum)")
 
 
 def run(args) -> int:
@@ -35,9 +43,10 @@ def run(args) -> int:
     from ..api.scenefile import load_scene_file
     from ._common import echo, run_synthesis
 
-    job = load_scene_file(args.scene_file)
-    if args.force:
-        job.output = dataclasses.replace(job.output, force=True)
+    job = load_scene_file(args.scene_file, run_index=args.run_index)
+    if args.force or args.out:
+        job.output = dataclasses.replace(job.output, force=args.force or job.output.force,
+                                         dir=args.out or job.output.dir)
     if args.print:
         echo("splineimu " + shlex.join(job.to_argv()))
         return 0
