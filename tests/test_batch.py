@@ -113,7 +113,7 @@ def test_run_index_writes_the_same_bytes_as_the_batch(batch, scene, tmp_path, ca
     out, _ = batch
     assert main(["run", str(scene), "--run-index", "7", "-o", str(tmp_path / "r7")]) == 0
     mine, theirs = _files(tmp_path / "r7"), _files(out / "runs" / "00007")
-    assert sorted(mine) == sorted(theirs) and "imu0/data.csv" in mine
+    assert sorted(mine) == sorted(theirs) and "mav0/imu0/data.csv" in mine
     for name in mine:
         assert mine[name] == theirs[name], name
 
