@@ -319,12 +319,12 @@ def test_sigkill_then_resume_completes_with_the_same_bytes(batch, scene, tmp_pat
     assert RUNS // 3 <= len(complete) < RUNS
     for p in complete:  # only complete run folders
         assert sorted(_files(p)) == sorted(_files(out / "runs" / p.name))
-    stamps = {p.name: (p.stat().st_mtime_ns, (p / "imu0" / "data.csv").stat().st_mtime_ns) for p in complete}
+    stamps = {p.name: (p.stat().st_mtime_ns, (p / "mav0" / "imu0" / "data.csv").stat().st_mtime_ns) for p in complete}
     result = run_batch(scene, RUNS, mine, workers=2, resume=True, progress=False)
     assert result.ok and result.skipped >= len(complete) and result.ran == RUNS - result.skipped
     _same_runs(out, mine, range(RUNS))
     assert _rows(mine) == _rows(out)
     for name, st in stamps.items():
         p = mine / "runs" / name
-        assert (p.stat().st_mtime_ns, (p / "imu0" / "data.csv").stat().st_mtime_ns) == st
+        assert (p.stat().st_mtime_ns, (p / "mav0" / "imu0" / "data.csv").stat().st_mtime_ns) == st
     assert not [p for p in (mine / "runs").iterdir() if not p.name.isdigit()]
