@@ -42,6 +42,8 @@ sample times at least ``h`` away from every knot, or ``h`` smaller than that dis
 
 from __future__ import annotations
 
+from decimal import Decimal
+
 import numpy as np
 
 from splineimu.lie import se3_exp, se3_log, so3_exp, so3_log
@@ -313,3 +315,18 @@ def assert_derivative_close(analytic, numeric, rtol=1e-7, atol=0.0, label="", t=
                 f"    diff:     {_fmt(A2[k] - N2[k])}"
             )
         raise AssertionError("\n".join(lines))
+
+
+def decimal_sin_cos(t):
+    """sin and cos of a Decimal by their series (exact to the context precision for |t| < 4)."""
+    s, term, k = Decimal(0), t, 1
+    while abs(term) > Decimal(10) ** -45:
+        s += term
+        term = -term * t * t / ((k + 1) * (k + 2))
+        k += 2
+    c, term, k = Decimal(0), Decimal(1), 0
+    while abs(term) > Decimal(10) ** -45:
+        c += term
+        term = -term * t * t / ((k + 1) * (k + 2))
+        k += 2
+    return s, c

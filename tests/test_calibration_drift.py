@@ -9,6 +9,7 @@ import math
 import numpy as np
 import pytest
 import yaml
+from test_calibration import TRUE_INTRINSICS as INTRINSICS
 
 from splineimu.calibration import (
     CalibrationOptions,
@@ -24,14 +25,6 @@ from splineimu.imu.noise import SensorModel
 from splineimu.scenes import make_scene
 
 RATE_HZ = 200.0
-INTRINSICS = {
-    "accelerometer_scale": [1.0e-3, -2.0e-3, 5.0e-4],
-    "accelerometer_misalignment": [[1.0, 2.0e-3, -1.0e-3], [1.5e-3, 0.999, 3.0e-3], [-2.0e-3, 1.0e-3, 1.002]],
-    "accelerometer_bias": [0.05, -0.02, 0.1],
-    "gyroscope_scale": [2.0e-3, -1.0e-3, 4.0e-3],
-    "gyroscope_misalignment": [[1.0, 2.0e-3, -1.0e-3], [1.0e-3, 1.0, 3.0e-3], [-2.0e-3, 1.0e-3, 1.0]],
-    "gyroscope_bias": [1.0e-3, -2.0e-3, 5.0e-4],
-}
 #: Noise models of splineimu/presets (EuRoC ADIS16448, TUM-VI BMI160, the lecture's example).
 MODELS = {
     "adis16448": {"gyroscope_noise_density": 1.6968e-04, "gyroscope_random_walk": 1.9393e-05,

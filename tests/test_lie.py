@@ -33,7 +33,13 @@ import pytest
 import scipy.linalg
 from hypothesis import given
 from hypothesis import strategies as st
-from numdiff import assert_derivative_close, assert_jacobian_close, numeric_jacobian, time_derivative
+from numdiff import (
+    assert_derivative_close,
+    assert_jacobian_close,
+    decimal_sin_cos,
+    numeric_jacobian,
+    time_derivative,
+)
 from scipy.spatial.transform import Rotation
 
 from splineimu import lie
@@ -439,21 +445,6 @@ def test_log_continuity_across_log_threshold():
         assert_close_rel(lie.so3_log(lie.so3_exp(x)), x, THRESHOLD_RTOL, "matrix log at LOG_SMALL_ANGLE")
 
 
-def _dec_sin_cos(t):
-    """sin and cos of a Decimal by their series (exact to the context precision for |t| < 4)."""
-    s, term, k = Decimal(0), t, 1
-    while abs(term) > Decimal(10) ** -45:
-        s += term
-        term = -term * t * t / ((k + 1) * (k + 2))
-        k += 2
-    c, term, k = Decimal(0), Decimal(1), 0
-    while abs(term) > Decimal(10) ** -45:
-        c += term
-        term = -term * t * t / ((k + 1) * (k + 2))
-        k += 2
-    return s, c
-
-
 def test_so3_jacobian_coefficients_against_60_digits():
     """The scalar coefficients sin t/t, (1-cos t)/t^2, (t-sin t)/t^3, 1/t^2 - cot(t/2)/2t against a
     60-digit reference: 4 eps on the Taylor side of JAC_SMALL_ANGLE; above it the last two lose
@@ -465,8 +456,8 @@ def test_so3_jacobian_coefficients_against_60_digits():
         ctx.prec = 60
         for t in ts:
             T = Decimal(float(t))
-            st_, ct_ = _dec_sin_cos(T)
-            sh, ch = _dec_sin_cos(T / 2)
+            st_, ct_ = decimal_sin_cos(T)
+            sh, ch = decimal_sin_cos(T / 2)
             ref = [st_ / T, (1 - ct_) / T**2, (T - st_) / T**3, 1 / T**2 - ch / (2 * T * sh)]
             got = list(K.so3_jac_coeffs(t * t)) + [K.so3_jac_inv_coeff(t * t)]
             for name, g, r in zip("abcd", got, ref):
@@ -497,7 +488,7 @@ def test_se3_q_block_against_60_digits():
 
             t2 = sum(v * v for v in p)
             t = t2.sqrt()
-            st_, ct_ = _dec_sin_cos(t)
+            st_, ct_ = decimal_sin_cos(t)
             c1 = (t - st_) / t**3
             c2 = (t2 / 2 + ct_ - 1) / t2**2
             c4 = (2 * t - 3 * st_ + t * ct_) / (2 * t**5)

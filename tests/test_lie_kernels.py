@@ -21,6 +21,7 @@ import numpy as np
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
+from numdiff import decimal_sin_cos
 
 from splineimu import lie
 from splineimu._kernels import lie as K
@@ -146,20 +147,6 @@ def test_batch_kernel_equals_its_element_function(name):
 # ------------------------------------------------------------ element functions
 
 
-def _dec_sin_cos(t):
-    s, term, k = Decimal(0), t, 1
-    while abs(term) > Decimal(10) ** -45:
-        s += term
-        term = -term * t * t / ((k + 1) * (k + 2))
-        k += 2
-    c, term, k = Decimal(0), Decimal(1), 0
-    while abs(term) > Decimal(10) ** -45:
-        c += term
-        term = -term * t * t / ((k + 1) * (k + 2))
-        k += 2
-    return s, c
-
-
 def test_exp_coefficients_against_60_digits():
     """sin t/t, (1 - cos t)/t^2, cos(t/2), sin(t/2)/t on both sides of EXP_SMALL_ANGLE: 4 eps."""
     th = K.EXP_SMALL_ANGLE
@@ -169,8 +156,8 @@ def test_exp_coefficients_against_60_digits():
         ctx.prec = 60
         for t in ts:
             T = Decimal(float(t))
-            st_, ct_ = _dec_sin_cos(T)
-            sh, ch = _dec_sin_cos(T / 2)
+            st_, ct_ = decimal_sin_cos(T)
+            sh, ch = decimal_sin_cos(T / 2)
             ref = [st_ / T, (1 - ct_) / T**2, ch, sh / T]
             for name, g, r in zip("abcs", K.so3_exp_coeffs(t * t), ref):
                 rel = abs(g / float(r) - 1.0)

@@ -26,6 +26,7 @@ makes stamps ``round(i * 1e9 / rate_hz)``.
 
 from __future__ import annotations
 
+import functools
 import io
 import math
 import os
@@ -196,6 +197,7 @@ class _ByteRange(io.RawIOBase):
         return n
 
 
+@functools.cache
 def _pandas_rounds_last_ulp() -> bool:
     import pandas as pd
 
@@ -203,22 +205,16 @@ def _pandas_rounds_last_ulp() -> bool:
     return (major, minor) < (3, 1)
 
 
-_PANDAS_ROUNDS_LAST_ULP = None
-
-
 def _read_fast(path):
     """pandas' C parser; large files in parts at line boundaries, parsed by parallel threads
     (the parser releases the GIL: 0.93 s -> 0.42 s for 300 MB on 2 CPUs, measured). Returns
     ``(None, None)`` or raises when the file is not a clean 7-column table."""
-    global _PANDAS_ROUNDS_LAST_ULP
-    if _PANDAS_ROUNDS_LAST_ULP is None:
-        _PANDAS_ROUNDS_LAST_ULP = _pandas_rounds_last_ulp()
     import pandas as pd
 
     kw = dict(comment="#", header=None, skip_blank_lines=True, engine="c", low_memory=False,
               dtype={0: np.int64, 1: np.float64, 2: np.float64, 3: np.float64,
                      4: np.float64, 5: np.float64, 6: np.float64})
-    if _PANDAS_ROUNDS_LAST_ULP:
+    if _pandas_rounds_last_ulp():
         kw["float_precision"] = "round_trip"  # pandas < 3.1 parses some decimals 1 ulp off
     size = path.stat().st_size
     parts = min(os.cpu_count() or 1, 4) if size >= PARALLEL_PARSE_BYTES else 1
