@@ -16,6 +16,7 @@ from fit_scenes import best_fixed, imu_errors, poses
 
 from splineimu import fit, lie
 from splineimu.errors import InputError
+from splineimu.scenes import make_scene
 
 RATIO = {"white": 1.15, "ar1": 1.3, "upsampled": 1.3}
 
@@ -171,3 +172,21 @@ def test_quaternion_noise_ignores_sign():
     ti = np.linspace(1, 9, 200)
     np.testing.assert_allclose(a.imu(ti)[0], b.imu(ti)[0], atol=1e-12)
     assert lie is not None
+
+
+def test_whole_input_warnings():
+    """A given spacing far too coarse for the motion is warned about (residual against the
+    noise read off third differences); 20 Hz poses of fast motion are warned as rate-limited,
+    the same motion at 200 Hz with white noise is not."""
+    t, p, q = poses("white", 20.0)
+    _, rep = fit(t, p, q, order=4, knot_spacing_s=1.0, return_report=True)
+    msg = [w.message for w in rep.warnings if w.code == "residual_above_noise"]
+    assert len(msg) == 1 and "position" in msg[0], [w.message for w in rep.warnings]
+    _, rep = fit(t, p, q, return_report=True)
+    assert [w.code for w in rep.warnings] == [], [w.message for w in rep.warnings]
+    sc = make_scene("flips", duration_s=20.0)
+    for rate, codes in ((20.0, ["input_rate_low"]), (200.0, [])):
+        ts = np.arange(0.0, 20.0, 1.0 / rate)
+        k = sc.kinematics(ts)
+        _, rep = fit(ts, k.position_world, lie.matrix_to_quat_xyzw(k.world_R_body), return_report=True)
+        assert [w.code for w in rep.warnings] == codes, [w.message for w in rep.warnings]

@@ -16,6 +16,12 @@ A run that passes (1) and jumps in but not out (or out but not in) is a step (th
 moved its origin): it cannot be dropped and is warned about with its time range, as is a run
 that passes (1) without any jump (motion faster than the spline follows there), once its
 residual reaches :data:`WARN_RESIDUAL_M` or :data:`WARN_RESIDUAL_RAD`.
+
+Two checks of the whole input (:func:`input_warnings`): fit residuals far above the pose noise
+(the automatic choice's cross-validated level, or, for a given spacing, a robust estimate from
+third differences, which reads coloured noise low and so gets a wider margin), and input whose
+top octave still holds motion (low-rate or re-estimated poses: whatever moves faster than half
+the pose rate is not in the input, and no predicted error can include it).
 """
 
 from __future__ import annotations
@@ -23,6 +29,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InputError
+from .knots import motion_limited
 from .report import FitWarning
 
 OUTLIER_SIGMAS = 8.0
@@ -34,6 +41,13 @@ WARN_RESIDUAL_M = 5e-3
 WARN_RESIDUAL_RAD = np.radians(1.0)
 #: Runs of outliers longer than this are not glitches (steps, or motion not followed).
 MAX_GLITCH_S = 0.5
+#: Residual RMS above this many times the cross-validated pose noise (or, for a given spacing,
+#: the third-difference estimate) is warned about.
+RESIDUAL_OVER_NOISE = 3.0
+RESIDUAL_OVER_DIFF_NOISE = 10.0
+#: Input whose top octave holds at least this fraction of the derivative's power (and whose
+#: second differences fall toward the Nyquist frequency) is warned about as rate-limited.
+TOP_OCTAVE_POWER = 1e-3
 #: Consecutive poses rotating more than this are refused (pi/2: 120 deg cannot be told from -240).
 MAX_STEP_ANGLE_RAD = np.pi / 2
 
@@ -164,3 +178,50 @@ def dropped_warning(t, drop):
         out.append(FitWarning("outliers_dropped", f"{b - a} poses between {t[a]:.3f} s and {t[b - 1]:.3f} s "
                               "dropped as a tracking glitch", float(t[a]), float(t[b - 1])))
     return _merge(out)
+
+
+def _diff_noise(X):
+    """Robust per-axis noise level from third differences (white noise: var = 20 sigma^2), as a
+    vector norm."""
+    d = np.diff(X, 3, axis=0)
+    mad = np.median(np.abs(d - np.median(d, axis=0)), axis=0) / 0.6745
+    return float(np.linalg.norm(mad / np.sqrt(20.0)))
+
+
+def _top_octave_fraction(t, X, r):
+    """Share of the power of the r-th difference quotient of X in the top octave of the band."""
+    h = float(np.median(np.diff(t)))
+    d = np.diff(X, r, axis=0) / h**r
+    P = (np.abs(np.fft.rfft(d - d.mean(axis=0), axis=0)) ** 2).sum(axis=1)
+    return float(P[P.size // 2:].sum() / max(P.sum(), 1e-300))
+
+
+def input_warnings(t, P, theta, res_pos, res_rot, keep, choice=None):
+    """Warnings about the whole input: residuals far above the pose noise, and poses too sparse
+    for the motion they hold (see the module docstring)."""
+    out = []
+    if t.size < 64:
+        return out
+    parts = (("position", P, res_pos, "m", 2, "accel"), ("rotation", theta, res_rot, "rad", 1, "gyro"))
+    for key, X, res, unit, _, _ in parts:
+        rms = float(np.sqrt(np.mean(np.sum(res[keep] ** 2, axis=1))))
+        if choice is not None:
+            noise, lim, how = choice[key]["cv_rms"], RESIDUAL_OVER_NOISE, "cross-validated"
+        else:
+            noise, lim, how = _diff_noise(X[keep]), RESIDUAL_OVER_DIFF_NOISE, "third-difference"
+        if rms > lim * max(noise, 1e-12) and rms > 1e-6:
+            out.append(FitWarning("residual_above_noise", f"the {key} fit residual ({rms:.3g} {unit} RMS) is "
+                                  f"{rms / noise:.1f}x the {how} pose noise ({noise:.3g} {unit}): the knot spacing "
+                                  f"is too coarse for the motion, or the poses hold steps"))
+    frac = {key: _top_octave_fraction(t, X, r) for key, X, _, _, r, _ in parts}
+    limited = {key: (choice[key]["motion_limited"] if choice is not None else motion_limited(X))
+               for key, X, *_ in parts}
+    hit = [(key, imu) for key, _, _, _, _, imu in parts if limited[key] and frac[key] > TOP_OCTAVE_POWER]
+    if hit:
+        nyq = 0.5 / float(np.median(np.diff(t)))
+        what = ", ".join(f"{100 * frac[k]:.2g}% of the {imu} power" for k, imu in hit)
+        out.append(FitWarning("input_rate_low", f"the poses hold motion up to their Nyquist frequency "
+                              f"({nyq:.3g} Hz; {nyq / 2:.3g}-{nyq:.3g} Hz holds {what}): motion faster than "
+                              f"{nyq:.3g} Hz is not in the input, so the synthesized IMU lacks it and the predicted "
+                              "errors do not include it"))
+    return out

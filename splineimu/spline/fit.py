@@ -36,7 +36,7 @@ from .banded import (
     solve_banded_scalar,
 )
 from .basis import blending_matrix
-from .checks import check_rotation_steps, classify_residuals, dropped_warning
+from .checks import check_rotation_steps, classify_residuals, dropped_warning, input_warnings
 from .core import KINDS, Spline
 from .knots import choose_knot_spacing, prediction_warnings, rotation_signal
 from .report import FitReport
@@ -404,7 +404,8 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
     ea = np.linalg.norm(res_rot[keep], axis=1)
     pred_g = choice["predicted_gyro_rms_rad_s"] if choice else None
     pred_a = choice["predicted_accel_rms_m_s2"] if choice else None
-    warnings = prediction_warnings(choice, t) + gap_warnings + warnings
+    warnings = (prediction_warnings(choice, t) + gap_warnings + warnings
+                + input_warnings(t, P, theta, res_pos, res_rot, keep, choice))
     report = FitReport(
         kind=kind, order=r_order, knot_spacing_s=lay_r[1], knot_spacing_source=source, n_poses=int(t.size),
         n_control=lay_r[3], span_s=(float(t[0]), float(t[-1])),
