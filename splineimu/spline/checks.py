@@ -45,6 +45,8 @@ MAX_GLITCH_S = 0.5
 #: the third-difference estimate) is warned about.
 RESIDUAL_OVER_NOISE = 3.0
 RESIDUAL_OVER_DIFF_NOISE = 10.0
+#: ... and only from this residual RMS on (m, rad): below, the input is as good as exact.
+RESIDUAL_FLOOR = 1e-4
 #: Input whose top octave holds at least this fraction of the derivative's power (and whose
 #: second differences fall toward the Nyquist frequency) is warned about as rate-limited.
 TOP_OCTAVE_POWER = 1e-3
@@ -209,7 +211,7 @@ def input_warnings(t, P, theta, res_pos, res_rot, keep, choice=None):
             noise, lim, how = choice[key]["cv_rms"], RESIDUAL_OVER_NOISE, "cross-validated"
         else:
             noise, lim, how = _diff_noise(X[keep]), RESIDUAL_OVER_DIFF_NOISE, "third-difference"
-        if rms > lim * max(noise, 1e-12) and rms > 1e-6:
+        if rms > lim * max(noise, 1e-12) and rms > RESIDUAL_FLOOR:
             out.append(FitWarning("residual_above_noise", f"the {key} fit residual ({rms:.3g} {unit} RMS) is "
                                   f"{rms / noise:.1f}x the {how} pose noise ({noise:.3g} {unit}): the knot spacing "
                                   f"is too coarse for the motion, or the poses hold steps"))
