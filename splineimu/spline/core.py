@@ -304,7 +304,7 @@ class Spline(MotionSource):
         (1, 3) outputs (~5x the cost of calling an empty compiled function), which gives the
         same numbers as the vectorized path.
         """
-        if isinstance(t_s, float):
+        if isinstance(t_s, float) and self.kind == "split":
             # one sample: the compiled kernel is called directly (numba's dispatcher would type
             # each argument again); it checks the range, and outside it (or for NaN) the general
             # path below raises
