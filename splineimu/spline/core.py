@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import lie
+from .._kernels import se3_imu as _ks
 from .._kernels import spline as _k
 from .._kernels import spline_imu as _ki
 from ..errors import SplineImuError
@@ -164,8 +165,8 @@ class Spline(MotionSource):
             D = np.zeros((n, 6))
             D[1:] = lie.se3_log(T)
         self._D = np.ascontiguousarray(D)
-        # per-knot table of the vectorized imu() kernel of split splines, built on its first
-        # call (64 bytes per knot, not worth holding for splines that never produce IMU data)
+        # per-knot table of the vectorized imu() kernels, built on their first call (32 or 64
+        # bytes per knot, not worth holding for splines that never produce IMU data)
         self._imu_knots = None
         # imu() at one float time: the compiled kernel and its table, built on first use
         self._imu_one = None
@@ -275,36 +276,47 @@ class Spline(MotionSource):
         """``f_b = R^T (a_w - g_w)`` (N, 3) [m/s^2]; a level body at rest reads (0, 0, +9.81)."""
         return self._evaluate(t_s, _k.WANT_FORCE, gravity)["f"]
 
-    def _split_imu_knots(self):
+    def _imu_knot_table(self):
         if self._imu_knots is None:
-            self._imu_knots = _ki.split_imu_knots(self._D)
+            make = _ki.split_imu_knots if self.kind == "split" else _ks.se3_imu_knots
+            self._imu_knots = make(self._D)
         return self._imu_knots
 
     def _build_imu_one(self):
         """The one-sample path of :meth:`imu`: its kernel's table, then the compiled kernel."""
         tol = 1e-9 * max(1.0, abs(self.t_max_s - self.t_min_s))  # that of check_times
-        self._imu_one_table = _ki.split_one_sample_table(
-            self.t0_s, self.dt_s, self.n_segments, self._Mc, self.position_t0_s, self.position_dt_s,
-            self.n_position_segments, self._M, self._split_imu_knots(), self.control_rotations,
-            self.control_positions, self.t_min_s - tol, self.t_max_s + tol)
-        self._imu_one = _ki.compiled(_ki.imu_split_one, (self.t_min_s, self._imu_one_table, _GRAVITY,
-                                                          np.empty((1, 3)), np.empty((1, 3))))
+        lo = self.t_min_s - tol
+        hi = self.t_max_s + tol
+        if self.kind == "split":
+            self._imu_one_table = _ki.split_one_sample_table(
+                self.t0_s, self.dt_s, self.n_segments, self._Mc, self.position_t0_s, self.position_dt_s,
+                self.n_position_segments, self._M, self._imu_knot_table(), self.control_rotations,
+                self.control_positions, lo, hi)
+            kernel = _ki.imu_split_one
+        else:
+            self._imu_one_table = _ks.se3_one_sample_table(self.t0_s, self.dt_s, self.n_segments, self._Mc,
+                                                           self._imu_knot_table(), self.control_rotations, lo, hi)
+            kernel = _ks.se3_imu_one
+        self._imu_one = _ki.compiled(kernel, (self.t_min_s, self._imu_one_table, _GRAVITY,
+                                              np.empty((1, 3)), np.empty((1, 3))))
         return self._imu_one
 
     def imu(self, t_s, gravity=DEFAULT_GRAVITY):
         """Ideal ``(gyro (N, 3), specific_force (N, 3))`` of a sensor at the body origin, in one pass.
 
-        Split splines use :func:`splineimu._kernels.spline_imu.imu_split`, vectorized across
-        samples (~5x faster); it rounds the basis and the acceleration as the general kernel of
-        :meth:`angular_velocity_body` and :meth:`specific_force_body` does and differs from
-        them by the rounding of the rotations only (a few 1e-15 relative). The two arrays
-        returned are views of one (2, N, 3) block.
+        Vectorized across samples: split splines use
+        :func:`splineimu._kernels.spline_imu.imu_split`, which rounds the basis and the
+        acceleration as the general kernel of :meth:`angular_velocity_body` and
+        :meth:`specific_force_body` does and differs from them by the rounding of the rotations
+        only (a few 1e-15 relative); se3 splines use :func:`splineimu._kernels.se3_imu.se3_imu`
+        (the same recursion as the general kernel, rounded differently: ~1e-15 relative). The two
+        arrays returned are views of one (2, N, 3) block.
 
-        A float ``t_s`` (one sample) takes a path without validation or allocation beyond the two
-        (1, 3) outputs (~5x the cost of calling an empty compiled function), which gives the
-        same numbers as the vectorized path.
+        A float ``t_s`` (one sample) takes a path without validation or allocation beyond the
+        two (1, 3) outputs (a few times the cost of calling an empty compiled function), which
+        gives the same numbers as the vectorized path.
         """
-        if isinstance(t_s, float) and self.kind == "split":
+        if isinstance(t_s, float):
             # one sample: the compiled kernel is called directly (numba's dispatcher would type
             # each argument again); it checks the range, and outside it (or for NaN) the general
             # path below raises
@@ -315,18 +327,18 @@ class Spline(MotionSource):
                     _GRAVITY if gravity is DEFAULT_GRAVITY else np.array(gravity, dtype=np.float64).reshape(3),
                     gyro, force):
                 return gyro, force
-        if self.kind != "split":
-            o = self._evaluate(t_s, _k.WANT_OMEGA | _k.WANT_FORCE, gravity)
-            return o["w"], o["f"]
         t = self.check_times(t_s)
         g = np.ascontiguousarray(np.asarray(gravity, dtype=np.float64).reshape(3))
-        K = self._split_imu_knots()
+        K = self._imu_knot_table()
         # one allocation for both outputs: depending on its state, glibc maps large blocks
         # afresh and unmaps them on free, so that a call page-faults its outputs in (measured at
         # N = 1e5: up to 20 of 40 ns per sample with two blocks); a single block was not hit
         # (from 4 MB numpy asks for huge pages)
         out = np.empty((2, t.shape[0], 3))
-        _ki.imu_split(t, self.t0_s, self.dt_s, self.n_segments, self.control_rotations, K, self._Mc,
-                      self.position_t0_s, self.position_dt_s, self.n_position_segments, self.control_positions,
-                      self._M, g, out)
+        if self.kind == "split":
+            _ki.imu_split(t, self.t0_s, self.dt_s, self.n_segments, self.control_rotations, K, self._Mc,
+                          self.position_t0_s, self.position_dt_s, self.n_position_segments,
+                          self.control_positions, self._M, g, out)
+        else:
+            _ks.se3_imu(t, self.t0_s, self.dt_s, self.n_segments, self.control_rotations, K, self._Mc, g, out)
         return out[0], out[1]
