@@ -174,8 +174,10 @@ class Spline(MotionSource):
 
     def __getstate__(self):
         # the one-sample path holds a compiled function, which does not pickle; it is rebuilt
+        # (with its table) on first use
         state = self.__dict__.copy()
         state["_imu_one"] = None
+        state["_imu_one_table"] = None
         return state
 
     # ------------------------------------------------------------------- properties
