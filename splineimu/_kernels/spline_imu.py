@@ -28,6 +28,13 @@ AVX-512: 5.5e7 samples/s at order 4 against 1.0e7, 3.7e7 against 6.5e6 at order 
 No ``fastmath`` (the project forbids it): without it LLVM neither reassociates nor contracts,
 so a sample's result does not depend on whether it falls in a vector body or a scalar
 remainder loop, that is on its position in the input.
+
+One sample (``Spline.imu`` at a float time): :func:`imu_split_one` does the same operations in
+the same order on scalars, so it returns the same numbers, reading one flat table
+(:func:`split_one_sample_table`) so that a call passes few arguments; it is called through
+:func:`compiled`, without numba's dispatcher. What a call costs is mostly Python's: the two
+(1, 3) outputs (~0.15 us each on the project's machine), the method call and the kernel call
+(~0.1 us); the kernel itself ~0.08 us at order 4, ~0.15 us at order 6.
 """
 
 from __future__ import annotations

@@ -71,6 +71,11 @@ class Spline(MotionSource):
     array([10.,  0.,  0.])
     """
 
+    # caches of imu(), built on first use (class defaults also serve splines pickled before them)
+    _imu_knots = None
+    _imu_one = None
+    _imu_one_table = None
+
     def __init__(self, t0_s, dt_s, positions, rotations, kind="split", order=4, origin_ns=0, *,
                  position_t0_s=None, position_dt_s=None, position_order=None):
         kind = str(kind).lower()
