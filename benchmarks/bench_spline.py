@@ -182,6 +182,8 @@ def first_call_times():
 def main():
     import numba
 
+    from splineimu.spline.core import FEW_SAMPLES
+
     numba.set_num_threads(1)
     splines = {c: make_spline(*c) for c in CASES}
     base = scipy_baseline(splines[("split", 4)])
@@ -216,8 +218,9 @@ def main():
     lines += [
         "## Throughput [samples/s]",
         "",
-        "Uniform random times (unsorted) and the same times sorted (IMU stamps are). scipy: "
-        "RotationSpline + CubicSpline on the split order-4 spline's poses at its knots.",
+        "Uniform random times (unsorted) and the same times sorted (IMU stamps are). Up to N = "
+        f"{FEW_SAMPLES} `imu` takes its few-sample path (sample by sample), above it the vectorized "
+        "kernels. scipy: RotationSpline + CubicSpline on the split order-4 spline's poses at its knots.",
         "",
         "| N | " + " | ".join(f"{k} {o} {s}" for k, o in CASES + [("scipy", 4)] for s in ("unsorted", "sorted"))
         + " |",

@@ -2,7 +2,8 @@
 of se3 splines (``_kernels/se3_imu.py``) against the general kernels ``eval_split`` and
 ``eval_se3`` (gyro and specific force of ``angular_velocity_body`` and
 ``specific_force_body``), against closed forms and differenced poses; the one-sample path
-(a float time) against the vectorized one, bit for bit."""
+(a float time) and the few-sample one (short float64 arrays) against the vectorized one, bit
+for bit."""
 
 from __future__ import annotations
 
@@ -13,6 +14,7 @@ from splineimu import RangeError, Spline, lie
 from splineimu._kernels import se3_imu as _ks
 from splineimu._kernels import spline as _k
 from splineimu._kernels.spline_imu import BLOCK, KNOT_ANGLE, KNOT_COLS, KNOT_D, split_imu_knots
+from splineimu.spline.core import FEW_SAMPLES
 
 # Both kernels share the rounding of the basis and of the acceleration (the same power sums in
 # the same order); they differ in how they rotate (Taylor polynomials and Rodrigues on the
@@ -277,7 +279,7 @@ def test_se3_matches_richardson_differences_of_poses(order):
     t = spl.t_min_s + (seg + rng.uniform(0.1, 0.9, seg.size)) * spl.dt_s  # clear of knots
     h = 0.02 * spl.dt_s
     g = np.array([0.1, 0.2, -9.81])
-    gyro, f = spl.imu(t, gravity=g)
+    gyro, f = spl._imu_vectorized(t, gravity=g)
     w_num = time_derivative(spl.rotation_matrix, t, h, group="so3")
     a_num = time_derivative(lambda s: time_derivative(lambda q: spl.pose(q)[0], s, h), t, h)
     f_num = np.einsum("nji,nj->ni", spl.rotation_matrix(t), a_num - g)
@@ -309,9 +311,17 @@ def test_se3_knot_table():
 
 # ------------------------------------------------------------------------ one sample
 def assert_one_sample_path_equal(spl, t, g=None):
-    """``imu(float)`` for every time equals the vectorized ``imu(array)`` bit for bit."""
+    """``imu(float)`` for every time, and ``imu(array)`` of a few of them, equal the vectorized
+    kernel bit for bit."""
     kw = {} if g is None else {"gravity": g}
-    gyro, f = spl.imu(t, **kw)
+    gyro, f = spl._imu_vectorized(t, **kw)
+    for n in (0, 1, 2, FEW_SAMPLES):  # few-sample path: up to FEW_SAMPLES times in one array
+        g_few, f_few = spl.imu(t[:n], **kw)
+        np.testing.assert_array_equal(g_few, gyro[:n])
+        np.testing.assert_array_equal(f_few, f[:n])
+    g_few, f_few = spl.imu(t[:2 * FEW_SAMPLES:2], **kw)  # a strided array
+    np.testing.assert_array_equal(g_few, gyro[:2 * FEW_SAMPLES:2])
+    np.testing.assert_array_equal(f_few, f[:2 * FEW_SAMPLES:2])
     for i, ti in enumerate(t):
         for scalar in (float(ti), np.float64(ti)):
             g1, f1 = spl.imu(scalar, **kw)
@@ -346,15 +356,20 @@ def test_one_sample_equals_vectorized_on_separate_position_grid():
 def test_one_sample_range_and_other_scalars(kind):
     spl = (random_split_spline if kind == "split" else random_se3_spline)(4, 1)
     tol = 1e-9 * max(1.0, spl.t_max_s - spl.t_min_s)
+    t = 0.5 * (spl.t_min_s + spl.t_max_s)
     for bad in (spl.t_min_s - 2 * tol, spl.t_max_s + 2 * tol, np.nan, np.inf, -np.inf):
         with pytest.raises(RangeError):
             spl.imu(float(bad))
-    t = 0.5 * (spl.t_min_s + spl.t_max_s)
-    gyro, f = spl.imu(np.array([t]))
-    for scalar in (t, np.array(t), [t]):  # a float, a 0-d array, a list: the same numbers
+        with pytest.raises(RangeError):
+            spl.imu(np.array([t, bad, t]))  # the few-sample path
+    gyro, f = spl._imu_vectorized(np.array([t]))
+    for scalar in (t, np.array(t), [t], np.array([t])):  # float, 0-d array, list, array: the same numbers
         g1, f1 = spl.imu(scalar)
         np.testing.assert_array_equal(g1, gyro)
         np.testing.assert_array_equal(f1, f)
+    t32 = np.array([t, t], dtype=np.float32)  # not float64: the vectorized path
+    for a, b in zip(spl.imu(t32), spl._imu_vectorized(t32)):
+        np.testing.assert_array_equal(a, b)
     a, b = spl.imu(t)
     c, d = spl.imu(t)
     for x in (a, b):

@@ -293,23 +293,15 @@ def _basis_one(H, row, k, u, inv_dt):
     return b, bd * inv_dt, (bdd * inv_dt) * inv_dt
 
 
-@jit(nrt=False)
-def se3_imu_one(t, H, g, gyro, force):
-    """:func:`se3_imu` at one time ``t`` (the same operations, so the same numbers). ``H`` from
-    :func:`se3_one_sample_table`, gravity ``g`` (3,); writes ``gyro`` (1, 3) and ``force`` (1, 3)
-    and returns True, or returns False (writing nothing) outside the table's time range or for
-    NaN."""
-    if not (H[H_LO] <= t <= H[H_HI]):
-        return False
+@jit(inline="always")
+def _se3_at(t, H, g0, g1, g2):
+    """Gyro and specific force at one time (in the table's range): :func:`se3_imu`'s operations."""
     k = int(H[H_K])
     dt = H[H_DT]
     inv_dt = 1.0 / dt
     seg, u = _segment_one(t, H[H_T0], dt, int(H[H_NSEG]) - 1)
     rows = int(H[H_ROWS])
     r = rows + ROW_COLS * seg + ROW_R
-    g0 = g[0]
-    g1 = g[1]
-    g2 = g[2]
     e0 = -(H[r] * g0 + H[r + 3] * g1 + H[r + 6] * g2)
     e1 = -(H[r + 1] * g0 + H[r + 4] * g1 + H[r + 7] * g2)
     e2 = -(H[r + 2] * g0 + H[r + 5] * g1 + H[r + 8] * g2)
@@ -324,8 +316,32 @@ def se3_imu_one(t, H, g, gyro, force):
             v0, v1, v2, w0, w1, w2, e0, e1, e2, a0, a1, a2 = _step(
                 b, bd, bdd, H[r], H[r + 1], H[r + 2], H[r + 3], H[r + 4], H[r + 5], H[r + 6],
                 v0, v1, v2, w0, w1, w2, e0, e1, e2, a0, a1, a2)
-    gyro[0, 0] = w0
-    gyro[0, 1] = w1
-    gyro[0, 2] = w2
-    force[0, 0], force[0, 1], force[0, 2] = _specific_force(v0, v1, v2, w0, w1, w2, e0, e1, e2)
+    f0, f1, f2 = _specific_force(v0, v1, v2, w0, w1, w2, e0, e1, e2)
+    return w0, w1, w2, f0, f1, f2
+
+
+@jit(nrt=False)
+def se3_imu_one(t, H, g, gyro, force):
+    """:func:`se3_imu` at one time ``t`` (the same operations, so the same numbers). ``H`` from
+    :func:`se3_one_sample_table`, gravity ``g`` (3,); writes ``gyro`` (1, 3) and ``force`` (1, 3)
+    and returns True, or returns False (writing nothing) outside the table's time range or for
+    NaN."""
+    if not (H[H_LO] <= t <= H[H_HI]):
+        return False
+    gyro[0, 0], gyro[0, 1], gyro[0, 2], force[0, 0], force[0, 1], force[0, 2] = _se3_at(t, H, g[0], g[1], g[2])
+    return True
+
+
+@jit(nrt=False)
+def se3_imu_few(t, H, g, out):
+    """:func:`se3_imu_one` at each of a few times ``t`` (N,) into ``out`` (2, N, 3); returns False
+    (writing nothing) if any time is outside the range or NaN."""
+    lo = H[H_LO]
+    hi = H[H_HI]
+    for i in range(t.shape[0]):
+        if not (lo <= t[i] <= hi):
+            return False
+    for i in range(t.shape[0]):
+        out[0, i, 0], out[0, i, 1], out[0, i, 2], out[1, i, 0], out[1, i, 1], out[1, i, 2] = _se3_at(
+            t[i], H, g[0], g[1], g[2])
     return True

@@ -332,14 +332,10 @@ def _position_accel_one(H, off, kp, up, inv_dtp, pos):
     return c0, c1, c2
 
 
-@jit(nrt=False)
-def imu_split_one(t, H, g, gyro, force):
-    """:func:`imu_split` at one time ``t``: the same operations in the same order, so the same
-    numbers, without the block scratch. ``H`` from :func:`split_one_sample_table`, gravity
-    ``g`` (3,); writes ``gyro`` (1, 3) and ``force`` (1, 3) and returns True, or returns False
-    (and writes nothing) if ``t`` is outside the table's time range or NaN."""
-    if not (H[H_LO] <= t <= H[H_HI]):
-        return False
+@jit(inline="always")
+def _split_at(t, H, g0, g1, g2):
+    """Gyro and specific force at one time (in the table's range): :func:`imu_split`'s operations
+    in its order, on scalars."""
     k = int(H[H_K])
     kp = int(H[H_KP])
     dt = H[H_DT]
@@ -349,9 +345,9 @@ def imu_split_one(t, H, g, gyro, force):
     seg, u = _segment_one(t, H[H_T0], dt, int(H[H_NSEG]) - 1)
     segp, up = _segment_one(t, H[H_T0P], dtp, int(H[H_NSEGP]) - 1)
     c0, c1, c2 = _position_accel_one(H, H_MC + k * k, kp, up, inv_dtp, int(H[H_POS]) + 3 * segp)
-    h0 = c0 - g[0]
-    h1 = c1 - g[1]
-    h2 = c2 - g[2]
+    h0 = c0 - g0
+    h1 = c1 - g1
+    h2 = c2 - g2
     r = int(H[H_ROWS]) + ROW_COLS * seg + ROW_R  # R_seg, row-major
     f0 = H[r] * h0 + H[r + 3] * h1 + H[r + 6] * h2
     f1 = H[r + 1] * h0 + H[r + 4] * h1 + H[r + 7] * h2
@@ -372,12 +368,33 @@ def imu_split_one(t, H, g, gyro, force):
         w0 = r0 + bd * d0
         w1 = r1 + bd * d1
         w2 = r2 + bd * d2
-    gyro[0, 0] = w0
-    gyro[0, 1] = w1
-    gyro[0, 2] = w2
-    force[0, 0] = f0
-    force[0, 1] = f1
-    force[0, 2] = f2
+    return w0, w1, w2, f0, f1, f2
+
+
+@jit(nrt=False)
+def imu_split_one(t, H, g, gyro, force):
+    """:func:`imu_split` at one time ``t``: the same operations in the same order, so the same
+    numbers, without the block scratch. ``H`` from :func:`split_one_sample_table`, gravity
+    ``g`` (3,); writes ``gyro`` (1, 3) and ``force`` (1, 3) and returns True, or returns False
+    (and writes nothing) if ``t`` is outside the table's time range or NaN."""
+    if not (H[H_LO] <= t <= H[H_HI]):
+        return False
+    gyro[0, 0], gyro[0, 1], gyro[0, 2], force[0, 0], force[0, 1], force[0, 2] = _split_at(t, H, g[0], g[1], g[2])
+    return True
+
+
+@jit(nrt=False)
+def imu_split_few(t, H, g, out):
+    """:func:`imu_split_one` at each of a few times ``t`` (N,) into ``out`` (2, N, 3), with no
+    block set-up; returns False (writing nothing) if any time is outside the range or NaN."""
+    lo = H[H_LO]
+    hi = H[H_HI]
+    for i in range(t.shape[0]):
+        if not (lo <= t[i] <= hi):
+            return False
+    for i in range(t.shape[0]):
+        out[0, i, 0], out[0, i, 1], out[0, i, 2], out[1, i, 0], out[1, i, 1], out[1, i, 2] = _split_at(
+            t[i], H, g[0], g[1], g[2])
     return True
 
 
