@@ -69,8 +69,7 @@ _B, _BD, _BDD, _W0, _W1, _W2, _F0, _F1, _F2, _D0, _D1, _D2, _ANG = range(13)
 _PW = 12
 _U = _PW + 1
 _U4 = np.uint64(KNOT_COLS)  # unsigned indices: numba checks signed ones for wraparound
-_U3 = np.uint64(3)
-_U9 = np.uint64(9)
+_U1, _U2, _U3, _U4, _U5, _U6, _U7, _U8, _U9 = (np.uint64(i) for i in range(1, 10))
 
 
 def split_imu_knots(increments):
@@ -299,11 +298,11 @@ def _segment_one(t, t0, dt, top):
 def _cumulative_basis_one(H, row, k, u):
     """Cumulative basis value ``b`` and ``db/du`` at ``u`` of the blending matrix row that starts
     at ``H[row]``: imu_split's power sums, in its order."""
-    b = (0.0 + H[row]) + H[row + 1] * u
-    bd = 0.0 + H[row + 1]
+    b = (0.0 + H[row]) + H[row + _U1] * u
+    bd = 0.0 + H[row + _U1]
     um1 = u  # u^(n-1)
     for n in range(2, k):
-        cn = H[row + n]
+        cn = H[row + np.uint64(n)]
         un = um1 * u
         b += cn * un
         bd += cn * (float(n) * um1)
@@ -319,23 +318,24 @@ def _position_accel_one(H, off, kp, up, inv_dtp, pos):
     c1 = 0.0
     c2 = 0.0
     for j in range(kp):
-        row = off + j * kp
-        bdd = 0.0 + (2.0 * H[row + 2] if kp > 2 else 0.0)
+        row = off + np.uint64(j * kp)
+        bdd = 0.0 + (2.0 * H[row + _U2] if kp > 2 else 0.0)
         um = up  # up^(n-2)
         for n in range(3, kp):
-            bdd += H[row + n] * (float(n * (n - 1)) * um)
+            bdd += H[row + np.uint64(n)] * (float(n * (n - 1)) * um)
             um = um * up
         e = (bdd * inv_dtp) * inv_dtp
-        c0 += e * H[pos + 3 * j]
-        c1 += e * H[pos + 3 * j + 1]
-        c2 += e * H[pos + 3 * j + 2]
+        p = pos + np.uint64(3 * j)
+        c0 += e * H[p]
+        c1 += e * H[p + _U1]
+        c2 += e * H[p + _U2]
     return c0, c1, c2
 
 
 @jit(inline="always")
 def _split_at(t, H, g0, g1, g2):
     """Gyro and specific force at one time (in the table's range): :func:`imu_split`'s operations
-    in its order, on scalars."""
+    in its order, on scalars. Unsigned indices: numba checks signed ones for wraparound."""
     k = int(H[H_K])
     kp = int(H[H_KP])
     dt = H[H_DT]
@@ -344,24 +344,25 @@ def _split_at(t, H, g0, g1, g2):
     inv_dtp = 1.0 / dtp
     seg, u = _segment_one(t, H[H_T0], dt, int(H[H_NSEG]) - 1)
     segp, up = _segment_one(t, H[H_T0P], dtp, int(H[H_NSEGP]) - 1)
-    c0, c1, c2 = _position_accel_one(H, H_MC + k * k, kp, up, inv_dtp, int(H[H_POS]) + 3 * segp)
+    c0, c1, c2 = _position_accel_one(H, np.uint64(H_MC + k * k), kp, up, inv_dtp,
+                                     np.uint64(int(H[H_POS]) + 3 * segp))
     h0 = c0 - g0
     h1 = c1 - g1
     h2 = c2 - g2
-    r = int(H[H_ROWS]) + ROW_COLS * seg + ROW_R  # R_seg, row-major
-    f0 = H[r] * h0 + H[r + 3] * h1 + H[r + 6] * h2
-    f1 = H[r + 1] * h0 + H[r + 4] * h1 + H[r + 7] * h2
-    f2 = H[r + 2] * h0 + H[r + 5] * h1 + H[r + 8] * h2
+    r = np.uint64(int(H[H_ROWS]) + ROW_COLS * seg + ROW_R)  # R_seg, row-major
+    f0 = H[r] * h0 + H[r + _U3] * h1 + H[r + _U6] * h2
+    f1 = H[r + _U1] * h0 + H[r + _U4] * h1 + H[r + _U7] * h2
+    f2 = H[r + _U2] * h0 + H[r + _U5] * h1 + H[r + _U8] * h2
     w0 = 0.0
     w1 = 0.0
     w2 = 0.0
     for j in range(1, k):
-        r = int(H[H_ROWS]) + ROW_COLS * (seg + j)
-        d0 = H[r + KNOT_D]
-        d1 = H[r + KNOT_D + 1]
-        d2 = H[r + KNOT_D + 2]
-        b, bd = _cumulative_basis_one(H, H_MC + j * k, k, u)
-        ct, al, be = _exp_coefficients(b, H[r + KNOT_ANGLE])
+        r = np.uint64(int(H[H_ROWS]) + ROW_COLS * (seg + j))
+        d0 = H[r]
+        d1 = H[r + _U1]
+        d2 = H[r + _U2]
+        b, bd = _cumulative_basis_one(H, np.uint64(H_MC + j * k), k, u)
+        ct, al, be = _exp_coefficients(b, H[r + _U3])
         f0, f1, f2 = _rotate_back(f0, f1, f2, d0, d1, d2, ct, al, be)
         r0, r1, r2 = _rotate_back(w0, w1, w2, d0, d1, d2, ct, al, be)
         bd = bd * inv_dt
