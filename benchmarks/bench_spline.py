@@ -10,8 +10,9 @@ Three measurements, each against a baseline timed in the same process, the cases
    kinds at orders 4 and 6, with a scipy baseline (RotationSpline for the rotation + CubicSpline
    for the position, second derivative and rotation applied: the same gyro + specific force)
    on the split spline's poses at its knots. Ratios: se3 / split and split / scipy.
-3. First call in a fresh process: import, building a spline, the first ``imu(array)`` and the
-   first ``imu(float)``, with numba's cache disabled (compilation) and warm (cache load).
+3. First call in a fresh process: import, building a spline, the first ``imu(array)`` (1000
+   times: the vectorized kernel) and the first ``imu(float)``, with numba's cache disabled
+   (compilation) and warm (cache load).
 
     python benchmarks/bench_spline.py            # writes benchmarks/results/spline.md
 """
@@ -119,7 +120,7 @@ def one_sample(splines):
             spl0.imu(a)
 
     cases = {"trivial": loop_trivial, **{c: loop_imu(splines[c]) for c in CASES}, "array": loop_array}
-    return {k: v / len(ts) for k, v in interleaved_best(cases, min_time=0.02, repeat=7).items()}
+    return {k: v / len(ts) for k, v in interleaved_best(cases, min_time=0.02, repeat=15).items()}
 
 
 def throughput(splines, base):
@@ -154,7 +155,7 @@ from benchmarks.bench_spline import make_spline
 t1 = c()
 s = make_spline(sys.argv[1], 4, 50)
 t2 = c()
-s.imu(np.linspace(s.t_min_s, s.t_max_s, 10))
+s.imu(np.linspace(s.t_min_s, s.t_max_s, 1000))
 t3 = c()
 s.imu(0.5 * (s.t_min_s + s.t_max_s))
 t4 = c()
@@ -202,7 +203,7 @@ def main():
         "Made by `python benchmarks/bench_spline.py` on the project's 2-core machine "
         f"(numba {numba.__version__}, numpy {np.__version__}; load average {load[0]:.1f} at the end, "
         "the machine is shared). CPU time (`time.process_time`), the cases interleaved, best of "
-        f"{REPEAT} (7 for one sample) repetitions; ratios are between figures of the same run.",
+        f"{REPEAT} (15 for one sample) repetitions; ratios are between figures of the same run.",
         "",
         "## One sample (`spl.imu(t)` at a float `t`)",
         "",
@@ -250,7 +251,7 @@ def main():
         "`import splineimu` is lazy; building the first spline imports numba and compiles or loads the "
         "Lie kernels it uses; then the first call of each `imu` path compiles or loads its kernel.",
         "",
-        "| kind | numba cache | import splineimu | build a spline | first `imu(array)` | first `imu(float)` |",
+        "| kind | numba cache | import splineimu | build a spline | first `imu(array of 1000)` | first `imu(float)` |",
         "| --- | --- | ---: | ---: | ---: | ---: |",
     ]
     for (kind, label), v in first.items():
