@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 
 from .. import lie
+from .._kernels import se3_imu as _ks
 from .._kernels import spline as _k
 from .._kernels import spline_imu as _ki
 from ..errors import SplineImuError
@@ -12,6 +15,17 @@ from ..motion import DEFAULT_GRAVITY, Kinematics, MotionSource
 from .basis import MAX_ORDER, blending_matrix
 
 KINDS = ("split", "se3")
+#: Arrays of up to this many times are evaluated sample by sample in :meth:`Spline.imu`, which
+#: is faster than setting up the vectorized kernel below ~130 (se3) to ~200 (split) samples
+#: (measured at order 4: 1.8 against 15 us for one, 9 to 13 against 19 us for 64).
+FEW_SAMPLES = 64
+_F64 = np.dtype(np.float64)
+# the default gravity as the kernels take it (private: the one-sample path passes it as it is)
+_GRAVITY = np.array(DEFAULT_GRAVITY, dtype=np.float64)
+# Outputs of the one-sample path of imu(): (1, 3) rows of (64, 1, 3) blocks, handed out in
+# turn. Making a view costs half of making an array (~80 against ~160 ns on the project's
+# machine, where a whole call costs ~0.6 us); a result that is kept keeps its block (1.5 kB).
+_ROWS = itertools.chain.from_iterable(map(np.empty, itertools.repeat((64, 1, 3))))
 
 
 def _check_order(order, name):
@@ -66,6 +80,11 @@ class Spline(MotionSource):
     >>> np.round(spl.velocity_world([0.25])[0], 12)
     array([10.,  0.,  0.])
     """
+
+    # caches of imu(), built on first use (class defaults also serve splines pickled before them)
+    _imu_knots = None
+    _imu_one = None
+    _imu_one_table = None
 
     def __init__(self, t0_s, dt_s, positions, rotations, kind="split", order=4, origin_ns=0, *,
                  position_t0_s=None, position_dt_s=None, position_order=None):
@@ -161,9 +180,20 @@ class Spline(MotionSource):
             D = np.zeros((n, 6))
             D[1:] = lie.se3_log(T)
         self._D = np.ascontiguousarray(D)
-        # per-knot table of the vectorized imu() kernel of split splines, built on its first
-        # call (64 bytes per knot, not worth holding for splines that never produce IMU data)
+        # per-knot table of the vectorized imu() kernels, built on their first call (32 or 64
+        # bytes per knot, not worth holding for splines that never produce IMU data)
         self._imu_knots = None
+        # imu() at one float time: the compiled kernel and its table, built on first use
+        self._imu_one = None
+        self._imu_one_table = None
+
+    def __getstate__(self):
+        # the one-sample path holds a compiled function, which does not pickle; it is rebuilt
+        # (with its table) on first use
+        state = self.__dict__.copy()
+        state["_imu_one"] = None
+        state["_imu_one_table"] = None
+        return state
 
     # ------------------------------------------------------------------- properties
     @property
@@ -263,28 +293,86 @@ class Spline(MotionSource):
         """``f_b = R^T (a_w - g_w)`` (N, 3) [m/s^2]; a level body at rest reads (0, 0, +9.81)."""
         return self._evaluate(t_s, _k.WANT_FORCE, gravity)["f"]
 
+    def _imu_knot_table(self):
+        if self._imu_knots is None:
+            make = _ki.split_imu_knots if self.kind == "split" else _ks.se3_imu_knots
+            self._imu_knots = make(self._D)
+        return self._imu_knots
+
+    def _imu_small_table(self):
+        """The table of the one-sample and few-sample kernels (built on first use)."""
+        if self._imu_one_table is None:
+            tol = 1e-9 * max(1.0, abs(self.t_max_s - self.t_min_s))  # that of check_times
+            lo = self.t_min_s - tol
+            hi = self.t_max_s + tol
+            if self.kind == "split":
+                self._imu_one_table = _ki.split_one_sample_table(
+                    self.t0_s, self.dt_s, self.n_segments, self._Mc, self.position_t0_s, self.position_dt_s,
+                    self.n_position_segments, self._M, self._imu_knot_table(), self.control_rotations,
+                    self.control_positions, lo, hi)
+            else:
+                self._imu_one_table = _ks.se3_one_sample_table(self.t0_s, self.dt_s, self.n_segments, self._Mc,
+                                                               self._imu_knot_table(), self.control_rotations,
+                                                               lo, hi)
+        return self._imu_one_table
+
+    def _build_imu_one(self):
+        """The compiled kernel of the one-sample path of :meth:`imu` (its table built first)."""
+        kernel = _ki.imu_split_one if self.kind == "split" else _ks.se3_imu_one
+        H = self._imu_small_table()
+        self._imu_one = _ki.compiled(kernel, (self.t_min_s, H, _GRAVITY, np.empty((1, 3)), np.empty((1, 3))))
+        return self._imu_one
+
     def imu(self, t_s, gravity=DEFAULT_GRAVITY):
         """Ideal ``(gyro (N, 3), specific_force (N, 3))`` of a sensor at the body origin, in one pass.
 
-        Split splines use :func:`splineimu._kernels.spline_imu.imu_split`, vectorized across
-        samples (~5x faster); it rounds the basis and the acceleration as the general kernel of
-        :meth:`angular_velocity_body` and :meth:`specific_force_body` does and differs from
-        them by the rounding of the rotations only (a few 1e-15 relative). The two arrays
-        returned are views of one (2, N, 3) block.
+        Vectorized across samples: split splines use
+        :func:`splineimu._kernels.spline_imu.imu_split`, which rounds the basis and the
+        acceleration as the general kernel of :meth:`angular_velocity_body` and
+        :meth:`specific_force_body` does and differs from them by the rounding of the rotations
+        only (a few 1e-15 relative); se3 splines use :func:`splineimu._kernels.se3_imu.se3_imu`
+        (the same recursion as the general kernel, rounded differently: ~1e-15 relative). The two
+        arrays returned are views of one (2, N, 3) block.
+
+        One or a few samples take paths without validation in Python or allocation beyond the
+        outputs, which give the same numbers as the vectorized one: a float ``t_s`` returns two
+        (1, 3) arrays for a few times the cost of calling an empty compiled function; a float64
+        array of up to :data:`FEW_SAMPLES` times is evaluated sample by sample, without the
+        vectorized kernel's set-up.
         """
-        if self.kind != "split":
-            o = self._evaluate(t_s, _k.WANT_OMEGA | _k.WANT_FORCE, gravity)
-            return o["w"], o["f"]
+        if isinstance(t_s, float):
+            # one sample: the compiled kernel is called directly (numba's dispatcher would type
+            # each argument again); it checks the range, and outside it (or for NaN) the general
+            # path below raises
+            call = self._imu_one or self._build_imu_one()
+            gyro = next(_ROWS)
+            force = next(_ROWS)
+            if call(t_s, self._imu_one_table,
+                    _GRAVITY if gravity is DEFAULT_GRAVITY else np.array(gravity, dtype=np.float64).reshape(3),
+                    gyro, force):
+                return gyro, force
+        elif type(t_s) is np.ndarray and t_s.ndim == 1 and t_s.shape[0] <= FEW_SAMPLES and t_s.dtype is _F64:
+            few = _ki.imu_split_few if self.kind == "split" else _ks.se3_imu_few
+            out = np.empty((2, t_s.shape[0], 3))
+            if few(t_s, self._imu_small_table(),
+                   _GRAVITY if gravity is DEFAULT_GRAVITY else np.array(gravity, dtype=np.float64).reshape(3), out):
+                return out[0], out[1]
+        return self._imu_vectorized(t_s, gravity)
+
+    def _imu_vectorized(self, t_s, gravity=DEFAULT_GRAVITY):
+        """:meth:`imu` through the vectorized kernels, at any number of samples."""
         t = self.check_times(t_s)
         g = np.ascontiguousarray(np.asarray(gravity, dtype=np.float64).reshape(3))
-        if self._imu_knots is None:
-            self._imu_knots = _ki.split_imu_knots(self._D)
+        K = self._imu_knot_table()
         # one allocation for both outputs: depending on its state, glibc maps large blocks
         # afresh and unmaps them on free, so that a call page-faults its outputs in (measured at
         # N = 1e5: up to 20 of 40 ns per sample with two blocks); a single block was not hit
         # (from 4 MB numpy asks for huge pages)
         out = np.empty((2, t.shape[0], 3))
-        _ki.imu_split(t, self.t0_s, self.dt_s, self.n_segments, self.control_rotations, self._imu_knots, self._Mc,
-                      self.position_t0_s, self.position_dt_s, self.n_position_segments, self.control_positions,
-                      self._M, g, out)
+        if self.kind == "split":
+            _ki.imu_split(t, self.t0_s, self.dt_s, self.n_segments, self.control_rotations, K, self._Mc,
+                          self.position_t0_s, self.position_dt_s, self.n_position_segments,
+                          self.control_positions, self._M, g, out)
+        else:
+            _ks.se3_imu(t, self.t0_s, self.dt_s, self.n_segments, self.control_rotations, K, self._Mc, g, out)
         return out[0], out[1]
