@@ -163,12 +163,12 @@ def _flush(Hloc, seg, band):
 
 
 @jit
-def control_grid_init(t, q, tc, c, out):
-    """Initial control rotations (n, 4) at the control times ``tc`` (sorted): the poses' slerp,
+def control_grid_init(t, q, tc, a1, a2, out):
+    """Initial control rotations (n, 4) at the control times ``tc`` (sorted): the poses' slerp ``F``,
     continued along the end geodesics outside their span, then the quasi-interpolant
-    ``F_i Exp(-c (Log(F_i^-1 F_{i-1}) + Log(F_i^-1 F_{i+1})))`` that undoes, to second order, the
-    spline's smoothing of its control points (``c = k / 24`` for order ``k``: a B-spline's basis
-    has variance ``k / 12`` knot spacings squared)."""
+    ``F_i Exp(a1 (L_-1 + L_1) + a2 (L_-2 - 4 L_-1 - 4 L_1 + L_2))``, ``L_j = Log(F_i^-1 F_{i+j})``:
+    the first two terms of the inverse of the spline's smoothing of its control points in powers
+    of the second difference (only ``a1`` within two controls of the ends)."""
     n = tc.shape[0]
     N = t.shape[0]
     F = np.empty((n, 4))
@@ -187,15 +187,22 @@ def control_grid_init(t, q, tc, c, out):
     out[0] = F[0]
     out[n - 1] = F[n - 1]
     for i in range(1, n - 1):
-        e0, e1, e2, e3 = _quat_mul(F[i, 0], -F[i, 1], -F[i, 2], -F[i, 3], F[i - 1, 0], F[i - 1, 1], F[i - 1, 2],
-                                   F[i - 1, 3])
-        x0, x1, x2 = _quat_log(e0, e1, e2, e3)
-        e0, e1, e2, e3 = _quat_mul(F[i, 0], -F[i, 1], -F[i, 2], -F[i, 3], F[i + 1, 0], F[i + 1, 1], F[i + 1, 2],
-                                   F[i + 1, 3])
-        y0, y1, y2 = _quat_log(e0, e1, e2, e3)
-        x0 = -c * (x0 + y0)
-        x1 = -c * (x1 + y1)
-        x2 = -c * (x2 + y2)
+        x0, x1, x2 = _rel_log(F, i, i - 1)
+        y0, y1, y2 = _rel_log(F, i, i + 1)
+        c1 = a1
+        c2 = 0.0
+        z0 = z1 = z2 = 0.0
+        if 2 <= i < n - 2:
+            c1 = a1 - 4.0 * a2
+            c2 = a2
+            u0, u1, u2 = _rel_log(F, i, i - 2)
+            v0, v1, v2 = _rel_log(F, i, i + 2)
+            z0 = u0 + v0
+            z1 = u1 + v1
+            z2 = u2 + v2
+        x0 = c1 * (x0 + y0) + c2 * z0
+        x1 = c1 * (x1 + y1) + c2 * z1
+        x2 = c1 * (x2 + y2) + c2 * z2
         _, _, _, qw, qs = _coeffs(x0 * x0 + x1 * x1 + x2 * x2)
         p0, p1, p2, p3 = _quat_mul(F[i, 0], F[i, 1], F[i, 2], F[i, 3], qw, qs * x0, qs * x1, qs * x2)
         nrm = math.sqrt(p0 * p0 + p1 * p1 + p2 * p2 + p3 * p3)
@@ -203,6 +210,13 @@ def control_grid_init(t, q, tc, c, out):
         out[i, 1] = p1 / nrm
         out[i, 2] = p2 / nrm
         out[i, 3] = p3 / nrm
+
+
+@jit(inline="always")
+def _rel_log(F, i, j):
+    """Log(F_i^-1 F_j) as a tuple."""
+    e0, e1, e2, e3 = _quat_mul(F[i, 0], -F[i, 1], -F[i, 2], -F[i, 3], F[j, 0], F[j, 1], F[j, 2], F[j, 3])
+    return _quat_log(e0, e1, e2, e3)
 
 
 @jit

@@ -20,6 +20,7 @@ well-posed and bridges them smoothly.
 from __future__ import annotations
 
 import time
+from functools import cache
 
 import numpy as np
 
@@ -40,7 +41,7 @@ from .banded import (
 from .basis import blending_matrix
 from .checks import check_rotation_steps, classify_residuals, dropped_warning
 from .core import KINDS, Spline
-from .knots import choose_knot_spacing, prediction_warnings, rotation_signal
+from .knots import choose_knot_spacing, prediction_warnings
 from .report import FitReport
 
 #: Gauss-Newton stops when the largest update is below this (rad, or m for SE3 translation)
@@ -75,6 +76,27 @@ def _validate(t_s, positions, quat_xyzw, weights):
         if w.shape != t.shape or np.any(~np.isfinite(w)) or np.any(w < 0):
             raise InputError("`weights` must be (N,) finite and non-negative")
     return t, P, R, w
+
+
+@cache
+def _blending(order):
+    """Plain and cumulative blending matrices (built from exact fractions: worth keeping)."""
+    return blending_matrix(order), blending_matrix(order, cumulative=True)
+
+
+@cache
+def _quasi_interpolant(order):
+    """``(a1, a2)``: control points ~ ``(1 + a1 d2 + a2 d2^2) f`` for samples ``f`` at the control times
+    (``d2`` the second difference), from the moments ``m2, m4`` of the basis weights with which
+    a spline's value at a control time averages its control points (T = 1 + t1 d2 + t2 d2^2 + ...,
+    t1 = m2 / 2, t2 = (m4 - m2) / 24, inverted)."""
+    M = blending_matrix(order)
+    uc = 0.0 if order % 2 == 0 else 0.5
+    w = M @ uc ** np.arange(order)
+    pos = np.arange(order) - (order - 2) / 2.0 - uc
+    m2, m4 = float(w @ pos**2), float(w @ pos**4)
+    t1, t2 = m2 / 2.0, (m4 - m2) / 24.0
+    return -t1, t1 * t1 - t2
 
 
 def _control_times(t0, dt, n, order):
@@ -132,8 +154,7 @@ class _Problem:
         self.order, self.t0, self.dt, self.nseg = order, t0, dt, nseg
         self.n = nseg + order - 1
         self.s = np.ascontiguousarray((t - t0) / dt)
-        self.M = blending_matrix(order)
-        self.Mc = blending_matrix(order, cumulative=True)
+        self.M, self.Mc = (m.copy() for m in _blending(order))
         self.smoothness = smoothness
         self.w_rot = w_rot
         self.w_pos = w_pos
@@ -187,8 +208,8 @@ class _Problem:
         whose outermost controls, which the data pin down only weakly, are then fitted to the
         poses of the end segments alone."""
         qc = np.empty((self.n, 4))
-        _gn.control_grid_init(self.t, self.q, _control_times(self.t0, self.dt, self.n, self.order), self.order / 24.0,
-                              qc)
+        _gn.control_grid_init(self.t, self.q, _control_times(self.t0, self.dt, self.n, self.order),
+                              *_quasi_interpolant(self.order), qc)
         m = END_SEGMENTS * self.order
         if self.nseg >= 3 * m:
             self._solve_end(qc, 0, m)
@@ -285,15 +306,16 @@ class _Problem:
         """Minimize over the state ``x``: ``system(x, want_h)`` gives ``(cost, band or None, g, res)``
         (``band`` the upper band of the normal matrix), ``retract(x, delta)`` the updated state.
 
-        The normal matrix is rebuilt after steps larger than :data:`H_REFRESH_STEP` only; below,
-        the steps reuse the last factorization (the fixed point, ``g = 0``, is the same; the
-        matrix changes by O(step), so the convergence stays fast) and a pass needs the gradient
-        alone. A step that raises the cost is retried with a fresh matrix, then with
-        Levenberg-Marquardt damping.
+        The normal matrix is rebuilt after steps larger than :data:`H_REFRESH_STEP` and when the
+        steps stop shrinking fast; otherwise the steps reuse the last factorization (the fixed point,
+        ``g = 0``, is the same; the matrix changes by O(step), so the convergence stays fast) and a
+        pass needs the gradient alone. A step that raises the cost is retried with a fresh matrix,
+        then with Levenberg-Marquardt damping. Converged: a step below :data:`GN_STEP_TOL`, or
+        steps from a fresh matrix that no longer shrink while the cost no longer falls (rounding).
         """
         cost, band, g, res = system(x, True)
         solver = BandSolver(band)
-        fresh = True
+        fresh = True  # the factorization was built at x
         lam = 0.0
         prev_step = np.inf
         it = 0
@@ -309,10 +331,10 @@ class _Problem:
                 x = x_new
                 converged = True
                 break
-            cost_new, band_new, g_new, res_new = system(x_new, step > H_REFRESH_STEP)
+            slow = step > 0.5 * prev_step
+            cost_new, band_new, g_new, res_new = system(x_new, step > H_REFRESH_STEP or (slow and not fresh))
             if cost_new <= cost * (1 + 1e-12) or not np.isfinite(cost):
-                # done when the steps no longer shrink and the cost no longer falls (rounding)
-                small = step < 1e-13 or ((cost - cost_new) <= tol * max(cost, 1e-300) and step > 0.5 * prev_step)
+                small = step < 1e-13 or (fresh and slow and (cost - cost_new) <= tol * max(cost, 1e-300))
                 prev_step = step
                 x, cost, g, res = x_new, cost_new, g_new, res_new
                 if band_new is not None:
@@ -462,7 +484,9 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
 
     probs = problems(w)
     Rc0 = probs[0].initial_rotations()
-    theta = rotation_signal(R)
+    theta = np.zeros((t.size, 3))  # accumulated body-frame increments (knots.rotation_signal)
+    _gn.quat_increments(q, theta[1:])
+    np.cumsum(theta, axis=0, out=theta)
     dropped = np.zeros(t.size, dtype=bool)
     warnings = []
     for attempt in range(2):
