@@ -1,7 +1,8 @@
 """Banded normal equations of spline fits: difference penalties and banded Cholesky solves.
 
-A fit's normal matrix is kept as upper blocks ``H[i, c]`` = block ``(i, i + c)``, ``c = 0 .. k-1``,
-shape (n, k, d, d) (``d = 1`` for the position part of split splines, as (n, k)).
+A fit's normal matrix is kept as its scalar upper band ``band[i, c]`` = entry ``(i, i + c)``,
+shape (n d, k d) for ``n`` controls of dimension ``d`` and order ``k`` ((n, k) for the position part
+of split splines).
 """
 
 from __future__ import annotations
@@ -29,18 +30,6 @@ def solve_banded_scalar(Hs, rhs):
     if not _kf.band_cholesky_solve(np.array(Hs, dtype=np.float64, order="C"), B):
         raise np.linalg.LinAlgError("banded normal matrix is not positive definite")
     return B.reshape(np.shape(rhs))
-
-
-def solve_banded_blocks(H, rhs, damping=0.0):
-    """Solve the symmetric block-banded system (upper blocks H (n, k, d, d)) for rhs (n*d, ...)."""
-    n, k, d, _ = H.shape
-    if damping:
-        H = H.copy()
-        idx = np.arange(d)
-        H[:, 0, idx, idx] += damping * np.maximum(H[:, 0, idx, idx], 1e-12)
-    band = np.zeros((n * d, k * d))
-    _kf.blocks_to_band(np.ascontiguousarray(H), band)
-    return solve_banded_scalar(band, rhs)
 
 
 @cache

@@ -10,8 +10,12 @@ Problem (weights ``w``, control poses ``T_i``)::
 - ``kind="se3"``: Gauss-Newton / LM on SE3 residuals ``[rho, phi]``, started from the split fit.
 
 Every residual touches ``k`` consecutive control points, so the normal matrix is block banded
-with ``k`` blocks of bandwidth; it is solved with a banded Cholesky factorization
-(:func:`scipy.linalg.solveh_banded`), never densely. The smoothness term penalizes
+with ``k`` blocks of bandwidth; it is solved with a banded Cholesky factorization, never densely.
+A rotation iteration is one pass over the poses (:mod:`splineimu._kernels.gauss_newton`: residuals,
+gradient, the normal matrix straight into its band, the penalty in the same kernels). It starts from
+a quasi-interpolant of the poses on the control grid whose weakly determined end controls are
+fitted to the end segments' poses first; once the steps are small they reuse the last
+factorization and the passes compute the gradient alone. The smoothness term penalizes
 third differences of the control positions and second differences of the rotation increments
 (Eilers & Marx's P-spline penalty); a tiny default keeps segments without data (gaps)
 well-posed and bridges them smoothly.
@@ -108,13 +112,6 @@ def _quat_wxyz(quat_xyzw):
     """Unit quaternions (w, x, y, z), C-contiguous, of validated input."""
     q = np.asarray(quat_xyzw, dtype=np.float64)[:, [3, 0, 1, 2]]
     return np.ascontiguousarray(q / np.linalg.norm(q, axis=1, keepdims=True))
-
-
-def _interp_rotations(t, q_wxyz, tq):
-    """Slerp of the poses' rotations to the times ``tq`` (clipped to the poses' span), (n, 4)."""
-    out = np.empty((tq.size, 4))
-    _gn.quat_slerp(t, q_wxyz, np.ascontiguousarray(tq, dtype=np.float64), out)
-    return out
 
 
 def _to_matrices(q_wxyz):
