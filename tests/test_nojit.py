@@ -26,6 +26,7 @@ def _run(args, timeout):
 
 def test_core_suites_without_jit():
     _run(["tests/test_lie.py", "tests/test_spline.py", "tests/test_spline_imu_kernel.py", "tests/test_scenes.py",
+          "tests/test_gauss_newton.py",
           "tests/test_fit.py::test_rotation_gradient_matches_finite_differences",
           "tests/test_fit.py::test_se3_gradient_matches_finite_differences",
           "splineimu/lie.py", "splineimu/spline"], timeout=900)

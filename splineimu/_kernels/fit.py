@@ -94,7 +94,9 @@ def position_residuals(s_all, P_meas, Pc, M_plain, nseg, out):
 def so3_normal_equations(s_all, w_all, R_meas, Rc, D, Mc, nseg, H, g, res):
     """Gauss-Newton blocks for rotation residuals. H (n, k, 3, 3), g (n, 3), res (M, 3) out.
 
-    Returns the weighted cost sum w |r|^2.
+    Returns the weighted cost sum w |r|^2. The reference implementation (matrices, the exact
+    ``Jl^-1(r)`` in H); the fit runs :func:`splineimu._kernels.gauss_newton.so3_pass`, which the
+    tests check against this.
     """
     k = Mc.shape[0]
     b = np.empty(k)

@@ -1,14 +1,18 @@
 """Banded normal equations of spline fits: difference penalties and banded Cholesky solves.
 
-A fit's normal matrix is kept as upper blocks ``H[i, c]`` = block ``(i, i + c)``, ``c = 0 .. k-1``,
-shape (n, k, d, d) (``d = 1`` for the position part of split splines, as (n, k)).
+A fit's normal matrix is kept as its scalar upper band ``band[i, c]`` = entry ``(i, i + c)``,
+shape (n d, k d) for ``n`` controls of dimension ``d`` and order ``k`` ((n, k) for the position part
+of split splines).
 """
 
 from __future__ import annotations
 
+from functools import cache
+
 import numpy as np
 
 from .._kernels import fit as _kf
+from .._kernels import gauss_newton as _gn
 
 #: Relative weight of the default smoothness penalty where data are dense (negligible bias).
 DEFAULT_SMOOTHNESS = 1e-10
@@ -28,34 +32,30 @@ def solve_banded_scalar(Hs, rhs):
     return B.reshape(np.shape(rhs))
 
 
-def solve_banded_blocks(H, rhs, damping=0.0):
-    """Solve the symmetric block-banded system (upper blocks H (n, k, d, d)) for rhs (n*d, ...)."""
-    n, k, d, _ = H.shape
-    if damping:
-        H = H.copy()
-        idx = np.arange(d)
-        H[:, 0, idx, idx] += damping * np.maximum(H[:, 0, idx, idx], 1e-12)
-    band = np.zeros((n * d, k * d))
-    _kf.blocks_to_band(np.ascontiguousarray(H), band)
-    return solve_banded_scalar(band, rhs)
+@cache
+def _difference_coefficients(order_diff):
+    c = np.array([1.0])
+    for _ in range(order_diff):
+        c = np.convolve(c, [-1.0, 1.0])
+    return tuple(c)
 
 
 def difference_coefficients(order_diff):
     """Coefficients of the order-r difference operator: row j touches j .. j + r."""
-    c = np.array([1.0])
-    for _ in range(order_diff):
-        c = np.convolve(c, [-1.0, 1.0])
-    return c  # length r + 1
+    return np.array(_difference_coefficients(order_diff))  # length r + 1
 
 
 def add_position_penalty(Hs, mu, r):
     """Add D_r^T diag(mu) D_r to scalar banded blocks Hs (n, k); mu scalar or per row (n - r,)."""
     n, k = Hs.shape
-    c = difference_coefficients(r)
-    L = c.size
+    L = r + 1
     if L > k or n < L:
         return
-    mu = np.broadcast_to(np.asarray(mu, dtype=np.float64), (n - L + 1,))
+    mu = np.ascontiguousarray(np.broadcast_to(np.asarray(mu, dtype=np.float64), (n - L + 1,)))
+    c = np.array(_difference_coefficients(r))
+    if Hs.flags.c_contiguous and Hs.dtype == np.float64:
+        _gn.add_difference_penalty(Hs, mu, c)
+        return
     for a in range(L):
         for b in range(a, L):
             Hs[a: n - L + 1 + a, b - a] += mu * c[a] * c[b]
@@ -66,8 +66,7 @@ def row_weights(sparse, width):
     n = sparse.size
     if n < width:
         return np.zeros(0, dtype=bool)
-    win = np.lib.stride_tricks.sliding_window_view(sparse, width)
-    return win.any(axis=1)
+    return np.convolve(np.asarray(sparse, dtype=np.float64), np.ones(width), mode="valid") > 0
 
 
 def layout(t_first, t_last, knot_spacing_s, order):
@@ -76,3 +75,27 @@ def layout(t_first, t_last, knot_spacing_s, order):
     nseg = max(1, int(round(span / float(knot_spacing_s))))
     dt = span / nseg if span > 0 else float(knot_spacing_s)
     return float(t_first), dt, nseg, nseg + order - 1
+
+
+class BandSolver:
+    """Solves with one symmetric positive definite band matrix (upper diagonals ``band`` (n, w)),
+    optionally damped (Levenberg-Marquardt: ``lam * max(diag, 1e-12)`` added to the diagonal);
+    the Cholesky factor is kept for further right-hand sides with the same damping."""
+
+    def __init__(self, band):
+        self.band = band
+        self._factor = None
+        self._lam = None
+
+    def solve(self, rhs, lam=0.0):
+        B = np.array(rhs, dtype=np.float64, order="C").reshape(self.band.shape[0], -1)
+        if self._factor is None or lam != self._lam:
+            U = self.band.copy()
+            if lam:
+                U[:, 0] += lam * np.maximum(U[:, 0], 1e-12)
+            if not _kf.band_cholesky_solve(U, B):
+                raise np.linalg.LinAlgError("banded normal matrix is not positive definite")
+            self._factor, self._lam = U, lam
+        else:
+            _gn.band_factored_solve(self._factor, B)
+        return B.reshape(np.shape(rhs))

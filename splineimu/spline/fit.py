@@ -10,8 +10,12 @@ Problem (weights ``w``, control poses ``T_i``)::
 - ``kind="se3"``: Gauss-Newton / LM on SE3 residuals ``[rho, phi]``, started from the split fit.
 
 Every residual touches ``k`` consecutive control points, so the normal matrix is block banded
-with ``k`` blocks of bandwidth; it is solved with a banded Cholesky factorization
-(:func:`scipy.linalg.solveh_banded`), never densely. The smoothness term penalizes
+with ``k`` blocks of bandwidth; it is solved with a banded Cholesky factorization, never densely.
+A rotation iteration is one pass over the poses (:mod:`splineimu._kernels.gauss_newton`: residuals,
+gradient, the normal matrix straight into its band, the penalty in the same kernels). It starts from
+a quasi-interpolant of the poses on the control grid whose weakly determined end controls are
+fitted to the end segments' poses first; once the steps are small they reuse the last
+factorization and the passes compute the gradient alone. The smoothness term penalizes
 third differences of the control positions and second differences of the rotation increments
 (Eilers & Marx's P-spline penalty); a tiny default keeps segments without data (gaps)
 well-posed and bridges them smoothly.
@@ -20,29 +24,39 @@ well-posed and bridges them smoothly.
 from __future__ import annotations
 
 import time
+from functools import cache
 
 import numpy as np
 
 from .. import lie
 from .._kernels import fit as _kf
+from .._kernels import gauss_newton as _gn
+from .._kernels import lie as _k_lie
 from ..errors import InputError, SplineImuError
 from .banded import (
     DEFAULT_SMOOTHNESS,
     SPARSE_SMOOTHNESS,
+    BandSolver,
     add_position_penalty,
     layout,
     row_weights,
-    solve_banded_blocks,
     solve_banded_scalar,
 )
 from .basis import blending_matrix
 from .checks import check_rotation_steps, classify_residuals, dropped_warning, input_warnings
 from .core import KINDS, Spline
-from .knots import choose_knot_spacing, prediction_warnings, rotation_signal
+from .knots import choose_knot_spacing, prediction_warnings
 from .report import FitReport
 
 #: Gauss-Newton stops when the largest update is below this (rad, or m for SE3 translation)
 GN_STEP_TOL = 1e-9
+#: Gauss-Newton rebuilds the normal matrix after steps larger than this (rad, or m for SE3)
+H_REFRESH_STEP = 1e-2
+#: The initialization fits the outer controls to the poses of this many times the order segments
+#: at each end, for at most END_ITERATIONS steps, down to steps of END_STEP_TOL (rad).
+END_SEGMENTS = 2
+END_ITERATIONS = 6
+END_STEP_TOL = 1e-4
 
 
 def _validate(t_s, positions, quat_xyzw, weights):
@@ -68,50 +82,48 @@ def _validate(t_s, positions, quat_xyzw, weights):
     return t, P, R, w
 
 
+@cache
+def _blending(order):
+    """Plain and cumulative blending matrices (built from exact fractions: worth keeping)."""
+    return blending_matrix(order), blending_matrix(order, cumulative=True)
+
+
+@cache
+def _quasi_interpolant(order):
+    """``(a1, a2)``: control points ~ ``(1 + a1 d2 + a2 d2^2) f`` for samples ``f`` at the control times
+    (``d2`` the second difference), from the moments ``m2, m4`` of the basis weights with which
+    a spline's value at a control time averages its control points (T = 1 + t1 d2 + t2 d2^2 + ...,
+    t1 = m2 / 2, t2 = (m4 - m2) / 24, inverted)."""
+    M = blending_matrix(order)
+    uc = 0.0 if order % 2 == 0 else 0.5
+    w = M @ uc ** np.arange(order)
+    pos = np.arange(order) - (order - 2) / 2.0 - uc
+    m2, m4 = float(w @ pos**2), float(w @ pos**4)
+    t1, t2 = m2 / 2.0, (m4 - m2) / 24.0
+    return -t1, t1 * t1 - t2
+
+
 def _control_times(t0, dt, n, order):
     """Time at the centre of each control point's support."""
     return t0 + (np.arange(n) - (order - 2) / 2.0) * dt
 
 
-def _interp_rotations(t, R, tq):
-    from scipy.spatial.transform import Rotation, Slerp
-
-    tq = np.clip(tq, t[0], t[-1])
-    return Slerp(t, Rotation.from_matrix(R))(tq).as_matrix()
-
-
-def _rotation_penalty(D, tangent_dim, mu, H, g, jac_inv):
-    """Linearized penalty mu * sum_j |d_{j+1} - d_j|^2 on the increments D (n, dim), D[0] unused.
-
-    d_j moves by Jr^-1(d_j) delta_j - Jl^-1(d_j) delta_{j-1}; jac_inv(x, side) gives those blocks.
-    """
-    n = D.shape[0]
-    mu = np.broadcast_to(np.asarray(mu, dtype=np.float64), (max(n - 2, 0),))
-    if n < 3 or not np.any(mu > 0):
-        return 0.0
-    d = D[1:]
-    Jr_inv = jac_inv(d, "right")  # (n-1, dim, dim): block of delta_j for increment j (j = 1..n-1)
-    Jl_inv = jac_inv(d, "left")
-    e = d[1:] - d[:-1]  # (n-2, dim): e_j for j = 1 .. n-2, touches delta_{j-1}, delta_j, delta_{j+1}
-    B_prev = Jl_inv[:-1]  # + Jl^-1(d_j) on delta_{j-1}
-    B_mid = -Jl_inv[1:] - Jr_inv[:-1]  # on delta_j
-    B_next = Jr_inv[1:]  # on delta_{j+1}
-    blocks = (B_prev, B_mid, B_next)
-    j = np.arange(1, n - 1)
-    for a in range(3):
-        for b in range(a, 3):
-            contrib = mu[:, None, None] * np.einsum("nzi,nzj->nij", blocks[a], blocks[b])
-            np.add.at(H, (j - 1 + a, b - a), contrib)
-        np.add.at(g, j - 1 + a, mu[:, None] * np.einsum("nzi,nz->ni", blocks[a], e))
-    return float(np.sum(mu[:, None] * e * e))
+def _quat_wxyz(quat_xyzw):
+    """Unit quaternions (w, x, y, z), C-contiguous, of validated input."""
+    q = np.asarray(quat_xyzw, dtype=np.float64)[:, [3, 0, 1, 2]]
+    return np.ascontiguousarray(q / np.linalg.norm(q, axis=1, keepdims=True))
 
 
-def _so3_jac_inv(x, side):
-    return lie.so3_right_jacobian_inv(x) if side == "right" else lie.so3_left_jacobian_inv(x)
+def _to_matrices(q_wxyz):
+    out = np.empty((q_wxyz.shape[0], 3, 3))
+    _k_lie.quat_wxyz_to_mat_batch(q_wxyz, out)
+    return out
 
 
-def _se3_jac_inv(x, side):
-    return lie.se3_right_jacobian_inv(x) if side == "right" else lie.se3_left_jacobian_inv(x)
+def _to_quats(R):
+    out = np.empty((R.shape[0], 4))
+    _k_lie.mat_to_quat_wxyz_batch(np.ascontiguousarray(R), out)
+    return out
 
 
 def _increments_so3(Rc):
@@ -134,13 +146,12 @@ def _increments_se3(Rc, pc):
 class _Problem:
     """One fit at a fixed knot layout."""
 
-    def __init__(self, t, P, R, w, order, t0, dt, nseg, smoothness, w_rot, w_pos):
-        self.t, self.P, self.R, self.w = t, P, R, w
+    def __init__(self, t, P, R, q, w, order, t0, dt, nseg, smoothness, w_rot, w_pos):
+        self.t, self.P, self.R, self.q, self.w = t, P, R, q, w
         self.order, self.t0, self.dt, self.nseg = order, t0, dt, nseg
         self.n = nseg + order - 1
         self.s = np.ascontiguousarray((t - t0) / dt)
-        self.M = blending_matrix(order)
-        self.Mc = blending_matrix(order, cumulative=True)
+        self.M, self.Mc = (m.copy() for m in _blending(order))
         self.smoothness = smoothness
         self.w_rot = w_rot
         self.w_pos = w_pos
@@ -174,22 +185,92 @@ class _Problem:
         return out
 
     # ------------------------------------------------------------------ rotation (split)
-    def _so3_system(self, Rc):
+    def _so3_system(self, qc, want_h):
         n, k = self.n, self.order
-        D = _increments_so3(Rc)
-        H = np.zeros((n, k, 3, 3))
+        D = np.empty((n, 3))
+        C = np.empty((n, 3, 3))
+        _gn.so3_knot_terms(qc, D, C)
+        band = np.zeros((3 * n, 3 * k)) if want_h else np.zeros((0, 0))
         g = np.zeros((n, 3))
         res = np.empty((self.t.size, 3))
         w = self.w * self.w_rot
-        cost = _kf.so3_normal_equations(self.s, w, self.R, Rc, D, self.Mc, self.nseg, H, g, res)
-        cost += _rotation_penalty(D, 3, self._mu(3) * self.w_rot, H, g, _so3_jac_inv)
-        return cost, H, g, res
+        cost = _gn.so3_pass(self.s, w, self.q, qc, D, C, self.Mc, self.nseg, want_h, band, g, res)
+        Cl = np.ascontiguousarray(np.swapaxes(C, 1, 2))  # Jl^-1(d) = Jr^-1(d)^T
+        cost += _gn.increment_penalty(D, C, Cl, self._penalty_weights(1.0), want_h, band, g)
+        return cost, (band if want_h else None), g, res
+
+    def initial_rotations(self):
+        """Control rotations (n, 3, 3) to start Gauss-Newton from: the quasi-interpolant of the
+        poses on the control grid (:func:`splineimu._kernels.gauss_newton.control_grid_init`),
+        whose outermost controls, which the data pin down only weakly, are then fitted to the
+        poses of the end segments alone."""
+        qc = np.empty((self.n, 4))
+        _gn.control_grid_init(self.t, self.q, _control_times(self.t0, self.dt, self.n, self.order),
+                              *_quasi_interpolant(self.order), qc)
+        m = END_SEGMENTS * self.order
+        if self.nseg >= 3 * m:
+            self._solve_end(qc, 0, m)
+            self._solve_end(qc, self.nseg - m, m)
+        return _to_matrices(qc)
+
+    def _solve_end(self, qc, seg0, m, max_iter=END_ITERATIONS):
+        """Gauss-Newton in place on ``qc`` for the outer ``m`` controls of the ``m`` segments from
+        ``seg0`` (the first or the last ones), from their poses, the controls further in held."""
+        k = self.order
+        ns = m + k - 1
+        i0, i1 = np.searchsorted(self.s, [seg0, seg0 + m])
+        if seg0 > 0:
+            i1 = self.s.size
+        sl = slice(i0, i1)
+        s_sub = self.s[sl] - seg0
+        w = self.w[sl] * self.w_rot
+        mu = self._penalty_weights(1.0)[seg0: seg0 + ns - 2]
+        free = slice(0, 3 * m) if seg0 == 0 else slice(3 * (k - 1), 3 * ns)
+        q_sub = qc[seg0: seg0 + ns].copy()
+        cost_prev = np.inf
+        for _ in range(max_iter):
+            D = np.empty((ns, 3))
+            C = np.empty((ns, 3, 3))
+            _gn.so3_knot_terms(q_sub, D, C)
+            band = np.zeros((3 * ns, 3 * k))
+            g = np.zeros((ns, 3))
+            cost = _gn.so3_pass(s_sub, w, self.q[sl], q_sub, D, C, self.Mc, m, True, band, g,
+                                np.empty((s_sub.size, 3)))
+            cost += _gn.increment_penalty(D, C, np.ascontiguousarray(np.swapaxes(C, 1, 2)), mu, True, band, g)
+            if not cost < cost_prev:
+                break
+            qc[seg0: seg0 + ns] = q_sub
+            cost_prev = cost
+            delta = np.zeros(3 * ns)
+            try:
+                delta[free] = BandSolver(np.ascontiguousarray(band[free])).solve(-g.reshape(-1)[free])
+            except np.linalg.LinAlgError:
+                break
+            q_new = np.empty_like(q_sub)
+            _gn.so3_retract(q_sub, delta.reshape(ns, 3), q_new)
+            q_sub = q_new
+            if np.abs(delta).max() < END_STEP_TOL:
+                break
 
     def solve_rotations(self, Rc, max_iter=30, tol=1e-12, progress=None):
-        return self._gauss_newton(Rc, None, max_iter, tol, progress)
+        def retract(qc, delta):
+            out = np.empty_like(qc)
+            _gn.so3_retract(qc, delta, out)
+            return out
+
+        qc, res, it, conv = self._gauss_newton(_to_quats(Rc), self._so3_system, retract, max_iter, tol, progress)
+        return _to_matrices(qc), res, it, conv
+
+    def _penalty_weights(self, w_pen):
+        key = float(w_pen)
+        if getattr(self, "_mu_cache", (None,))[0] != key:
+            self._mu_cache = (key, np.ascontiguousarray(self._mu(3) * self.w_rot * w_pen, dtype=np.float64))
+        return self._mu_cache[1]
 
     # ------------------------------------------------------------------ SE3
-    def _se3_system(self, Rc, pc):
+    def _se3_system(self, x, want_h):
+        """The SE3 kernel always builds the normal matrix; ``want_h`` only says whether it is kept."""
+        Rc, pc = x
         n, k = self.n, self.order
         D = _increments_se3(Rc, pc)
         H = np.zeros((n, k, 6, 6))
@@ -197,53 +278,79 @@ class _Problem:
         res = np.empty((self.t.size, 6))
         w6 = np.ascontiguousarray(np.column_stack([self.w * self.w_pos] * 3 + [self.w * self.w_rot] * 3))
         cost = _kf.se3_normal_equations(self.s, w6, self.R, self.P, Rc, pc, D, self.Mc, self.nseg, H, g, res)
+        band = np.zeros((6 * n, 6 * k))
+        _kf.blocks_to_band(H, band)
+        Jr_inv = np.zeros((n, 6, 6))
+        Jl_inv = np.zeros((n, 6, 6))
+        Jr_inv[1:] = lie.se3_right_jacobian_inv(D[1:])
+        Jl_inv[1:] = lie.se3_left_jacobian_inv(D[1:])
         # scale the penalty per component like the data weights
-        cost += _rotation_penalty(D, 6, self._mu(3) * np.sqrt(self.w_pos * self.w_rot), H, g, _se3_jac_inv)
-        return cost, H, g, res
+        cost += _gn.increment_penalty(D, Jr_inv, Jl_inv, self._penalty_weights(np.sqrt(self.w_pos / self.w_rot)),
+                                      True, band, g)
+        return cost, band, g, res
 
-    def _gauss_newton(self, Rc, pc, max_iter, tol, progress):
-        se3 = pc is not None
-        system = (lambda: self._se3_system(Rc, pc)) if se3 else (lambda: self._so3_system(Rc))
-        cost, H, g, res = system()
+    def solve_se3(self, Rc, pc, max_iter=30, tol=1e-12, progress=None):
+        def retract(x, delta):
+            T = lie.se3_exp(delta)
+            return np.matmul(x[0], T[:, :3, :3]), x[1] + np.einsum("nij,nj->ni", x[0], T[:, :3, 3])
+
+        (Rc, pc), res, it, conv = self._gauss_newton((Rc, pc), self._se3_system, retract, max_iter, tol, progress)
+        return Rc, pc, res, it, conv
+
+    # ------------------------------------------------------------------ Gauss-Newton / LM
+    @staticmethod
+    def _gauss_newton(x, system, retract, max_iter, tol, progress):
+        """Minimize over the state ``x``: ``system(x, want_h)`` gives ``(cost, band or None, g, res)``
+        (``band`` the upper band of the normal matrix), ``retract(x, delta)`` the updated state.
+
+        The normal matrix is rebuilt after steps larger than :data:`H_REFRESH_STEP` and when the
+        steps stop shrinking fast; otherwise the steps reuse the last factorization (the fixed point,
+        ``g = 0``, is the same; the matrix changes by O(step), so the convergence stays fast) and a
+        pass needs the gradient alone. A step that raises the cost is retried with a fresh matrix,
+        then with Levenberg-Marquardt damping. Converged: a step below :data:`GN_STEP_TOL`, or
+        steps from a fresh matrix that no longer shrink while the cost no longer falls (rounding).
+        """
+        cost, band, g, res = system(x, True)
+        solver = BandSolver(band)
+        fresh = True  # the factorization was built at x
         lam = 0.0
+        prev_step = np.inf
         it = 0
         converged = False
         for it in range(1, max_iter + 1):
-            delta = solve_banded_blocks(H, -g.reshape(-1), damping=lam).reshape(g.shape)
+            delta = solver.solve(-g.reshape(-1), lam).reshape(g.shape)
             step = float(np.abs(delta).max())
-            if se3:
-                T = lie.se3_exp(delta)
-                pc_new = pc + np.einsum("nij,nj->ni", Rc, T[:, :3, 3])
-                Rc_new = np.matmul(Rc, T[:, :3, :3])
-            else:
-                Rc_new = np.matmul(Rc, lie.so3_exp(delta))
+            x_new = retract(x, delta)
             if progress is not None:
                 progress(it)
             if lam == 0.0 and step < GN_STEP_TOL:
                 # converged: the residuals at the new point differ from these by O(step)
-                Rc = Rc_new
-                if se3:
-                    pc = pc_new
+                x = x_new
                 converged = True
                 break
-            if se3:
-                cost_new, H_new, g_new, res_new = self._se3_system(Rc_new, pc_new)
-            else:
-                cost_new, H_new, g_new, res_new = self._so3_system(Rc_new)
+            slow = step > 0.5 * prev_step
+            cost_new, band_new, g_new, res_new = system(x_new, step > H_REFRESH_STEP or (slow and not fresh))
             if cost_new <= cost * (1 + 1e-12) or not np.isfinite(cost):
-                small = step < 1e-13 or (cost - cost_new) <= tol * max(cost, 1e-300)
-                Rc, cost, H, g, res = Rc_new, cost_new, H_new, g_new, res_new
-                if se3:
-                    pc = pc_new
+                small = step < 1e-13 or (fresh and slow and (cost - cost_new) <= tol * max(cost, 1e-300))
+                prev_step = step
+                x, cost, g, res = x_new, cost_new, g_new, res_new
+                if band_new is not None:
+                    solver = BandSolver(band_new)
+                fresh = band_new is not None
                 lam = lam / 10 if lam > 1e-9 else 0.0
                 if small:
                     converged = True
                     break
+            elif not fresh:
+                # the step came from an old matrix: rebuild it here and try again
+                cost, band, g, res = system(x, True)
+                solver = BandSolver(band)
+                fresh = True
             else:
                 lam = 1e-4 if lam == 0 else lam * 10
                 if lam > 1e8:
                     break
-        return (Rc, pc, res, it, converged) if se3 else (Rc, res, it, converged)
+        return x, res, it, converged
 
 
 def _resolve(value, name, kind_name):
@@ -335,6 +442,7 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
     if kind == "se3" and (position_order is not None or position_knot_spacing_s is not None):
         raise SplineImuError("position_order and position_knot_spacing_s need kind='split'")
     t, P, R, w = _validate(t_s, positions, quat_xyzw, weights)
+    q = _quat_wxyz(quat_xyzw)
     if t.size < 2:
         raise InputError(f"too few poses to fit: got {t.size}, need at least 2")
     gap_warnings = check_rotation_steps(t, R)
@@ -368,12 +476,14 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
 
     def problems(wts):
         args = (float(smoothness), 1.0 / sig_r**2, 1.0 / sig_p**2)
-        return (_Problem(t, P, R, wts, r_order, *lay_r[:3], *args),
-                _Problem(t, P, R, wts, p_order, *lay_p[:3], *args))
+        return (_Problem(t, P, R, q, wts, r_order, *lay_r[:3], *args),
+                _Problem(t, P, R, q, wts, p_order, *lay_p[:3], *args))
 
     probs = problems(w)
-    Rc0 = _interp_rotations(t, R, _control_times(lay_r[0], lay_r[1], lay_r[3], r_order))
-    theta = rotation_signal(R)
+    Rc0 = probs[0].initial_rotations()
+    theta = np.zeros((t.size, 3))  # accumulated body-frame increments (knots.rotation_signal)
+    _gn.quat_increments(q, theta[1:])
+    np.cumsum(theta, axis=0, out=theta)
     dropped = np.zeros(t.size, dtype=bool)
     warnings = []
     for attempt in range(2):
@@ -427,7 +537,7 @@ def _solve(probs, Rc, kind, max_iter, tick, smoothness):
         if kind == "se3":
             Pc = rot.solve_positions()
             Rc, res_rot, iters, conv = rot.solve_rotations(Rc, max_iter=max_iter, progress=tick)
-            Rc, Pc, res6, it2, conv = rot._gauss_newton(Rc, Pc, max_iter, 1e-12, tick)
+            Rc, Pc, res6, it2, conv = rot.solve_se3(Rc, Pc, max_iter=max_iter, progress=tick)
             iters += it2
             spl = Spline(rot.t0, rot.dt, Pc, Rc, kind, rot.order)
             p_fit, q_fit = spl.pose(rot.t)
