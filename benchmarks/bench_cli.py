@@ -7,22 +7,25 @@ Input: the lecture ellipse's exact poses, 60 s at 200 Hz (12 001 poses, a TUM fi
 programs read it and write the same three files: the IMU csv (EuRoC layout), the ground-truth
 csv (EuRoC columns, velocity and zero biases) and the ground truth as a TUM file.
 
-- ours: ``splineimu from-tum POSES -o OUT --force`` (noise-free, automatic order and knots);
-  it also writes the yaml files and report.json of its output folder.
+- ours: ``splineimu from-tum POSES -o OUT`` (noise-free, automatic order and knots); it also
+  writes the yaml files and report.json of its output folder.
 - scipy: the script in :func:`baseline` (``python bench_cli.py --baseline POSES OUT``):
   ``np.loadtxt``, scipy ``RotationSpline`` + ``CubicSpline`` through the poses, gyro (body rate)
   and specific force at 200 Hz, ``np.savetxt`` with ``"%.17g"``.
 
 Each is timed as a child process: its CPU time (user + system, ``RUSAGE_CHILDREN``), best of
 ``--reps`` interleaved repetitions (the order alternates), ``NUMBA_NUM_THREADS=1``, after one
-untimed run of each (the numba cache is warm, as after a user's first run).
+untimed run of each (the numba cache is warm, as after a user's first run). Every run writes
+into a new folder.
 
 The breakdown of our command comes from two more kinds of child runs (best of ``--reps`` for
 each phase): ``python -X importtime`` (the sum of the top-level imports, lazy ones included: the
 import time of the whole command, as importtime counts it) and an instrumented run
 (``--phases``): the CLI's ``main`` in a fresh process with timers (CPU time) around the reader,
 the fit, the synthesis (the stream's pieces) and the writer, and a count of the numba kernels
-loaded from the cache (or compiled). Writes the table to stdout and, with ``--write``, to
+loaded from the cache (or compiled). Two more child processes give the floor that any run of
+the command pays: the interpreter with numpy, scipy.linalg and numba imported, and that plus
+one call of a cached kernel (numba's start-up). Writes the table to stdout and, with ``--write``, to
 benchmarks/results/cli.md.
 """
 
@@ -100,12 +103,18 @@ def make_poses(path: Path) -> int:
     return int(t_ns.size)
 
 
+#: the floor of any run: the interpreter with the libraries every command imports, and numba's
+#: start-up on the first call of a kernel from the cache
+FLOOR = "import numpy, scipy.linalg, numba"
+FLOOR_KERNEL = FLOOR + "; from splineimu import lie; lie.quat_xyzw_to_matrix(numpy.array([[0.0, 0.0, 0.0, 1.0]]))"
+
+
 def _env() -> dict:
     return dict(os.environ, PYTHONPATH=str(ROOT), NUMBA_NUM_THREADS="1")
 
 
 def ours_cmd(poses, out) -> list:
-    return [sys.executable, "-m", "splineimu", "from-tum", str(poses), "-o", str(out), "--force"]
+    return [sys.executable, "-m", "splineimu", "from-tum", str(poses), "-o", str(out)]
 
 
 def baseline_cmd(poses, out) -> list:
@@ -225,32 +234,34 @@ def main():
         tmp = Path(tmp)
         poses = tmp / "exact.tum"
         n = make_poses(poses)
-        ours, base = ours_cmd(poses, tmp / "ours"), baseline_cmd(poses, tmp / "scipy")
-        child_cpu(ours)  # untimed: fills the numba cache if needed
-        child_cpu(base)
-        t_ours, t_base, base_ph, ph, imp_ours, imp_base = [], [], [], [], [], []
-        for r in range(args.reps):
+        child_cpu(ours_cmd(poses, tmp / "ours"))  # untimed: fills the numba cache if needed
+        child_cpu(baseline_cmd(poses, tmp / "scipy"))
+        gyro_diff = _check(poses, tmp / "ours", tmp / "scipy")
+        t_ours, t_base, base_ph, ph, imp_ours, imp_base, floor, floor_kernel = [], [], [], [], [], [], [], []
+        for r in range(args.reps):  # every run writes into a new folder (nothing to replace)
             for which in ((0, 1) if r % 2 == 0 else (1, 0)):
                 if which == 0:
-                    t_ours.append(child_cpu(ours)[0])
+                    t_ours.append(child_cpu(ours_cmd(poses, tmp / f"ours{r}"))[0])
                 else:
-                    t, text = child_cpu(base)
+                    t, text = child_cpu(baseline_cmd(poses, tmp / f"scipy{r}"))
                     t_base.append(t)
                     base_ph.append(json.loads(text))
             text = child_cpu([sys.executable, str(Path(__file__).resolve()), "--phases", str(poses),
-                              str(tmp / "phases")])[1]
+                              str(tmp / f"phases{r}")])[1]
             ph.append(json.loads(text.splitlines()[-1]))  # after the command's own summary
-            imp_ours.append(import_time(ours))
-            imp_base.append(import_time(base))
-        gyro_diff = _check(poses, tmp / "ours", tmp / "scipy")
+            floor.append(child_cpu([sys.executable, "-c", FLOOR])[0])
+            floor_kernel.append(child_cpu([sys.executable, "-c", FLOOR_KERNEL])[0])
+            imp_ours.append(import_time(ours_cmd(poses, tmp / f"imp_ours{r}")))
+            imp_base.append(import_time(baseline_cmd(poses, tmp / f"imp_scipy{r}")))
     load1 = os.getloadavg()
-    text = report(n, args.reps, t_ours, t_base, base_ph, ph, imp_ours, imp_base, gyro_diff, load0, load1)
+    text = report(n, args.reps, t_ours, t_base, base_ph, ph, imp_ours, imp_base, (floor, floor_kernel), gyro_diff,
+                  load0, load1)
     print(text)
     if args.write:
         (HERE / "results" / "cli.md").write_text(text)
 
 
-def report(n, reps, t_ours, t_base, base_ph, ph, imp_ours, imp_base, gyro_diff, load0, load1) -> str:
+def report(n, reps, t_ours, t_base, base_ph, ph, imp_ours, imp_base, floors, gyro_diff, load0, load1) -> str:
     import numba
     import numpy as np
     import scipy
@@ -307,6 +318,8 @@ def report(n, reps, t_ours, t_base, base_ph, ph, imp_ours, imp_base, gyro_diff, 
         f"| the rest of `main()` (options, stamps, report, lazy imports) | {other:.3f} | - |",
         f"| of all the above: numba dispatch (cache loads: {ph[-1]['numba_kernels']} kernels) | "
         f"{phase('numba_dispatch'):.3f} | - |",
+        f"| floor: `python -c '{FLOOR}'` | {best(floors[0]):.3f} | - |",
+        f"| floor + the first call of a cached kernel (numba's start-up) | {best(floors[1]):.3f} | - |",
         f"| whole instrumented process | {phase('total'):.3f} | "
         f"{best(p['imports'] + p['compute'] + p['write'] for p in base_ph):.3f} (in-script timers) |",
         "",
