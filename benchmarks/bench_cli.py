@@ -44,6 +44,8 @@ from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
+#: the splineimu checkout timed (``--tree``; default: this one)
+TREE = ROOT
 RATE_HZ = 200.0
 DURATION_S = 60.0
 EUROC_IMU_HEADER = ("#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1],"
@@ -110,7 +112,7 @@ FLOOR_KERNEL = FLOOR + "; from splineimu import lie; lie.quat_xyzw_to_matrix(num
 
 
 def _env() -> dict:
-    return dict(os.environ, PYTHONPATH=str(ROOT), NUMBA_NUM_THREADS="1")
+    return dict(os.environ, PYTHONPATH=str(TREE), NUMBA_NUM_THREADS="1")
 
 
 def ours_cmd(poses, out) -> list:
@@ -219,6 +221,8 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--reps", type=int, default=5, help="interleaved repetitions (best of)")
     ap.add_argument("--write", action="store_true", help="write benchmarks/results/cli.md")
+    ap.add_argument("--tree", type=Path, default=ROOT,
+                    help="time the splineimu of another checkout (e.g. an older commit), default this one")
     ap.add_argument("--baseline", nargs=2, metavar=("POSES", "OUT"), help=argparse.SUPPRESS)
     ap.add_argument("--phases", nargs=2, metavar=("POSES", "OUT"), help=argparse.SUPPRESS)
     args = ap.parse_args()
@@ -228,8 +232,10 @@ def main():
     if args.phases:
         print(json.dumps(phases(*args.phases)))
         return
+    global TREE
+    TREE = args.tree.resolve()
     load0 = os.getloadavg()
-    sys.path.insert(0, str(ROOT))
+    sys.path.insert(0, str(TREE))
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         poses = tmp / "exact.tum"
@@ -261,6 +267,11 @@ def main():
         (HERE / "results" / "cli.md").write_text(text)
 
 
+def _describe(tree) -> str:
+    res = subprocess.run(["git", "-C", str(tree), "log", "-1", "--format=%h %s"], capture_output=True, text=True)
+    return f"{tree} ({res.stdout.strip()[:90]})" if res.returncode == 0 else str(tree)
+
+
 def report(n, reps, t_ours, t_base, base_ph, ph, imp_ours, imp_base, floors, gyro_diff, load0, load1) -> str:
     import numba
     import numpy as np
@@ -283,6 +294,7 @@ def report(n, reps, t_ours, t_base, base_ph, ph, imp_ours, imp_base, floors, gyr
         f"# bench_cli: python {platform.python_version()}, numpy {np.__version__}, scipy {scipy.__version__}, "
         f"numba {numba.__version__}, {os.cpu_count()} CPUs ({platform.machine()})",
         f"# command: python benchmarks/bench_cli.py {' '.join(sys.argv[1:])}",
+        f"# splineimu timed: {_describe(TREE)}",
         f"# load average (1/5/15 min) at start: {'/'.join(f'{x:.1f}' for x in load0)}, "
         f"at end: {'/'.join(f'{x:.1f}' for x in load1)}",
         "```",
