@@ -35,9 +35,9 @@ def _commands():
 
 
 def build_parser(command: str | None = None) -> argparse.ArgumentParser:
-    """The parser of every command; with ``command`` (a command's name), only that command's
-    flags are added (the others are listed with their help line), so that a run does not
-    import what the other commands' flags need."""
+    """The parser of every command; with ``command`` (a command's name, or ``""`` for none),
+    only that command's flags are added (every command is listed with its help line), so that
+    a run, ``--help`` or ``--version`` does not import what the other commands' flags need."""
     parser = argparse.ArgumentParser(
         prog="splineimu",
         description=(
@@ -133,7 +133,7 @@ def main(argv=None) -> int:
     """
     program = argv is None
     argv = sys.argv[1:] if program else list(argv)
-    command = argv[0] if argv and not argv[0].startswith("-") else None
+    command = argv[0] if argv and not argv[0].startswith("-") else ""
     parser = build_parser(command)
     args = parser.parse_args(argv)
     if not getattr(args, "_run", None):
