@@ -19,7 +19,8 @@ fallback are controlled in one place:
 - Kernels found in the cache are loaded without numba's full start-up (:func:`_load_lazily`):
   numba "refreshes" its typing and target contexts before its first cache load in a process,
   importing and installing the registries of all its implementations, which only compiling
-  needs (0.13-0.15 s of CPU per process, measured: a third of a short command's own work).
+  needs (0.1-0.15 s of CPU per process, measured, plus scipy.linalg's import, 0.25 s, which
+  ``numba.np.arraymath`` makes when nothing else has).
   The contexts are refreshed as before on the first cache miss, before compiling.
   ``SPLINEIMU_NUMBA_FULL_INIT=1`` restores numba's own path.
 """
