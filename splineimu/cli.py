@@ -34,7 +34,10 @@ def _commands():
     return sorted(mods, key=lambda m: (getattr(m, "ORDER", 100), m.NAME))
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The parser of every command; with ``command`` (a command's name, or ``""`` for none),
+    only that command's flags are added (every command is listed with its help line), so that
+    a run, ``--help`` or ``--version`` does not import what the other commands' flags need."""
     parser = argparse.ArgumentParser(
         prog="splineimu",
         description=(
@@ -52,7 +55,8 @@ def build_parser() -> argparse.ArgumentParser:
             description=getattr(mod, "DESCRIPTION", mod.HELP),
             formatter_class=argparse.RawDescriptionHelpFormatter,
         )
-        mod.add_arguments(p)
+        if command is None or command == mod.NAME:
+            mod.add_arguments(p)
         p.set_defaults(_run=mod.run)
     return parser
 
@@ -127,13 +131,16 @@ def main(argv=None) -> int:
     argv : list of str, optional
         The arguments (default: ``sys.argv[1:]``).
     """
-    parser = build_parser()
+    program = argv is None
+    argv = sys.argv[1:] if program else list(argv)
+    command = argv[0] if argv and not argv[0].startswith("-") else ""
+    parser = build_parser(command)
     args = parser.parse_args(argv)
     if not getattr(args, "_run", None):
         parser.print_help()
         return 2
     # the program itself (not main() called in-process, e.g. by tests): SIGTERM cleans up like Ctrl-C
-    old_handlers = _install_signal_handlers() if argv is None else {}
+    old_handlers = _install_signal_handlers() if program else {}
     try:
         return _run(args)
     finally:

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import platform
+import sys
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -159,12 +160,12 @@ class SynthesisStream:
 
     def __init__(self, source, t_ns, *, gravity, extrinsic, imu_config, seed, temperature_c, sampling,
                  with_increments, chunk_samples, vibration=None):
-        from .imu.timing import SampleTimes
-
         if sampling not in ("point", "mean"):
             raise SplineImuError(f"sampling must be 'point' or 'mean', got {sampling!r}")
         self.source = source
-        self.sample_times = t_ns if isinstance(t_ns, SampleTimes) else None
+        # a SampleTimes exists only once its module is loaded: plain stamps do not import it
+        timing = sys.modules.get(f"{__package__}.imu.timing")
+        self.sample_times = t_ns if timing is not None and isinstance(t_ns, timing.SampleTimes) else None
         if self.sample_times is None:
             self.t_ns = self.true_ns = np.asarray(t_ns, dtype=np.int64)
         else:

@@ -275,3 +275,43 @@ def test_output_files_get_the_usual_permissions(tmp_path):
     assert len(files) == 11
     for p in files:
         assert p.stat().st_mode & 0o777 == 0o644, p
+
+
+def test_a_run_imports_only_what_its_command_uses(ellipse_tum, tmp_path):
+    # a fresh process: from-tum without plots, bags, vibration or a timing model loads none of
+    # their modules, nor the flags of the other commands (compare's pull in metrics)
+    code = (
+        "import sys\n"
+        "from splineimu.cli import main\n"
+        f"assert main(['from-tum', {str(ellipse_tum)!r}, '-o', {str(tmp_path / 'o')!r}]) == 0\n"
+        "heavy = ('pandas', 'matplotlib', 'rosbags', 'dask', 'distributed', 'tqdm', 'scipy.ndimage',\n"
+        "         'splineimu.metrics', 'splineimu.imu.vibration', 'splineimu.imu.timing', 'splineimu.plots',\n"
+        "         'splineimu.io.bag')\n"
+        "print(sorted(m for m in heavy if m in sys.modules))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.split("\n")[-2] == "[]"
+
+
+def test_every_command_keeps_its_flags(capsys):
+    from splineimu.cli import build_parser
+
+    full = build_parser()
+    only = build_parser("compare")
+    argv = ["compare", "a.tum", "b.tum", "--metric", "rpe", "--align", "se3"]
+    assert vars(full.parse_args(argv)) == vars(only.parse_args(argv))
+    with pytest.raises(SystemExit):  # the other commands are listed, without their flags
+        only.parse_args(["from-tum", "p.tum", "--rate", "100"])
+    assert "from-tum" in only.format_help() and "compare" in only.format_help()
+
+
+def test_help_and_version_import_no_numpy():
+    code = ("import sys, contextlib, io\nfrom splineimu.cli import main\n"
+            "for argv in (['--help'], ['--version'], []):\n"
+            "    with contextlib.redirect_stdout(io.StringIO()):\n"
+            "        try:\n            main(argv)\n        except SystemExit:\n            pass\n"
+            "print('numpy' in sys.modules)\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "False"

@@ -47,10 +47,10 @@ def load_timing(value, origin):
     ConfigError
         Not a mapping, an unknown key, a value out of range.
     """
+    if value is None:  # (before the import, as in load_vibration)
+        return None
     from ..imu.timing import TimingModel
 
-    if value is None:
-        return None
     doc, keys = _yaml_place(origin, "timing")
     if isinstance(value, TimingModel):
         model = value
@@ -82,10 +82,10 @@ def load_vibration(value, origin):
     ConfigError
         A bad component (errors at the file and line of a scene file or vibration file).
     """
+    if value is None:  # (before the import: runs without vibration do not load its module)
+        return None
     from ..imu.vibration import VibrationModel
 
-    if value is None:
-        return None
     if isinstance(value, VibrationModel):
         model = value
     elif isinstance(value, str):  # a YAML file holding the block: errors at its own lines

@@ -78,10 +78,24 @@ def check_rotation_steps(t, R):
                        float(t[i]), float(t[i + 1])) for i in np.flatnonzero(big & gap)]
 
 
-def _running_median(x, width):
-    from scipy.ndimage import median_filter
+#: Window x samples up to which the running median runs in the kernel (a few ms); beyond, in
+#: scipy.ndimage (O(N log w)), whose import (0.04-0.2 s) is then small next to the fit.
+KERNEL_MEDIAN_MAX_WORK = 2e7
 
-    return median_filter(x, size=max(int(width) | 1, 3), mode="nearest")
+
+def _running_median(x, width):
+    """scipy.ndimage ``median_filter(x, size, mode="nearest")`` with an odd ``size`` near ``width``."""
+    size = max(int(width) | 1, 3)
+    x = np.ascontiguousarray(x, dtype=np.float64)
+    if x.size * size > KERNEL_MEDIAN_MAX_WORK:
+        from scipy.ndimage import median_filter
+
+        return median_filter(x, size=size, mode="nearest")
+    from .._kernels.median import running_median
+
+    out = np.empty_like(x)
+    running_median(x, size, out)
+    return out
 
 
 def _extrapolation_errors(t, Y):

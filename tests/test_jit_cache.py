@@ -1,0 +1,78 @@
+"""The jit factory's cache loading (splineimu/_jit.py), in fresh processes.
+
+A kernel found in numba's cache is loaded without numba's context refresh (its registries are
+not imported), gives the same numbers, and a signature not in the cache still compiles;
+``SPLINEIMU_NUMBA_FULL_INIT=1`` restores numba's own path.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numba
+import pytest
+
+from splineimu import _jit
+
+ROOT = Path(__file__).resolve().parents[1]
+
+pytestmark = pytest.mark.skipif(numba.config.DISABLE_JIT or not _jit.CACHE,
+                                reason="needs numba's cache (NUMBA_DISABLE_JIT / SPLINEIMU_NO_CACHE set)")
+
+KERNEL = '''
+from splineimu._jit import jit
+
+
+@jit
+def scaled_sum(x, a):
+    s = 0.0
+    for i in range(x.shape[0]):
+        s += a * x[i]
+    return s
+'''
+
+SCRIPT = '''
+import sys
+import numpy as np
+import lazykernel
+
+f = lazykernel.scaled_sum
+print(f(np.arange(5.0), 2.0))
+print("refreshed" if "numba.np.arraymath" in sys.modules else "lazy")  # imported by numba's refresh
+if len(sys.argv) > 1:
+    print(f(np.arange(5.0, dtype=np.float32), 3))  # a signature not in the cache: compiled
+print(sum(f._cache_hits.values()), sum(f._cache_misses.values()))
+'''
+
+
+def _run(tmp_path, *args, **env):
+    e = {k: v for k, v in os.environ.items() if k != "SPLINEIMU_NUMBA_FULL_INIT"}
+    e.update(PYTHONPATH=os.pathsep.join([str(tmp_path), str(ROOT)]), **env)
+    out = subprocess.run([sys.executable, "-c", SCRIPT, *args], env=e, capture_output=True, text=True, cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    return out.stdout.split()
+
+
+def test_cached_kernel_loads_without_refresh_and_misses_still_compile(tmp_path):
+    (tmp_path / "lazykernel.py").write_text(KERNEL)
+    first = _run(tmp_path)  # compiles (numba refreshes) and fills the cache
+    assert first == ["20.0", "refreshed", "0", "1"]
+    again = _run(tmp_path, "miss")
+    assert again[:2] == ["20.0", "lazy"]
+    assert float(again[2]) == pytest.approx(30.0, rel=0, abs=0)  # float32 compiled after a refresh
+    assert again[3:] == ["1", "1"]  # one hit (float64), one miss (float32)
+    full = _run(tmp_path, SPLINEIMU_NUMBA_FULL_INIT="1")
+    assert full == ["20.0", "refreshed", "1", "0"]
+
+
+def test_lazy_loader_only_on_numba_function_caches():
+    # the kernels of the package got the lazy loader; a cache-less dispatcher is left alone
+    from splineimu._kernels import textfmt
+
+    assert textfmt.format_table._cache.load_overload.func is _jit._load_lazily
+    plain = numba.njit(cache=False)(lambda x: x)
+    assert _jit._lazy_cache(plain) is plain
+    assert not hasattr(plain._cache.load_overload, "func")
