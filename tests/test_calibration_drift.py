@@ -89,13 +89,14 @@ def test_random_walk_density_is_estimated_from_the_phases():
     # white noise: no drift found, or one too small to be significant
     _, white = _coverage("accelerometer", "white", range(6))
     assert all(c.random_walk[0] < 1e-3 and not c.drift_dominated for c in white)
-    # noise-free data: no drift beyond round-off (measured 6e-10), not flagged
+    # noise-free data: no drift beyond round-off (measured 6e-10, and 1.9e-8 with numpy 2.4.6 /
+    # scipy 1.17.1 / numba 0.68.1: five orders below the ADIS16448's 3e-3), not flagged
     sc = make_scene("six-position")
     t_ns = sc.sample_times_ns(RATE_HZ)
     w, f = sc.imu(sc.t_s_from_ns(t_ns))
     m = SensorModel(INTRINSICS).apply(sc.t_s_from_ns(t_ns), w, f)
     cal = calibrate_accel(t_ns, m.accel, gyro=m.gyro)
-    assert cal.random_walk[0] < 1e-8 and not cal.drift_dominated
+    assert cal.random_walk[0] < 1e-7 and not cal.drift_dominated
 
 
 def test_drifting_accelerometer_coverage_over_twelve_seeds():
