@@ -52,18 +52,13 @@ neither noise nor motion is taken as noise-limited.
 
 from __future__ import annotations
 
+from functools import cache
+
 import numpy as np
 
 from .. import lie
-from .._kernels import fit as _kf
-from .banded import (
-    DEFAULT_SMOOTHNESS,
-    SPARSE_SMOOTHNESS,
-    add_position_penalty,
-    layout,
-    row_weights,
-    solve_banded_scalar,
-)
+from .._kernels import cv as _kcv
+from .banded import DEFAULT_SMOOTHNESS, SPARSE_SMOOTHNESS, difference_coefficients, layout
 from .basis import blending_matrix
 from .report import WARN_ACCEL_M_S2, WARN_GYRO_RAD_S, FitWarning
 
@@ -85,6 +80,12 @@ _LADDER = 1.25
 _END_FRACTION = 0.05
 #: The residual autocorrelation below which noise counts as uncorrelated.
 _ACF_LEVEL = 0.1
+
+
+@cache
+def _penalty(k):
+    """Coefficients of the difference penalty of an order-k fit (3rd differences at most)."""
+    return difference_coefficients(min(3, k - 1))
 
 
 def max_rotation_spacing(t, R):
@@ -132,56 +133,44 @@ class _Window:
         self.index = np.arange(n)
         lo, hi = t[0] + _END_FRACTION * (t[-1] - t[0]), t[-1] - _END_FRACTION * (t[-1] - t[0])
         self.scored = (t >= lo) & (t <= hi) & (w > 0)
+        self.n_scored = int(np.count_nonzero(self.scored))
 
     def folds(self, block):
         return ((self.index // max(int(block), 1)) % N_FOLDS).astype(np.int64)
 
     def fit_folds(self, k, dt, fold, nfold, X=None):
         """Control points (nfold, n, d) of the fits of X (default: the signal) without each
-        fold, and the layout."""
+        fold, the samples' spline parameters, segments and basis rows, and the layout."""
         X = self.X if X is None else X
         t0, dt_, nseg, n = layout(self.t[0], self.t[-1], dt, k)
         s = np.ascontiguousarray((self.t - t0) / dt_)
         M = blending_matrix(k)
         H = np.zeros((nfold, n, k))
-        rhs = np.zeros((nfold, n, X.shape[1]))
-        _kf.fold_normal_equations(s, self.w, fold, X, M, nseg, H, rhs)
-        Ht, rt = H.sum(axis=0), rhs.sum(axis=0)
-        seg = np.clip(np.floor(s).astype(np.int64), 0, nseg - 1)
-        used = self.w > 0
+        C = np.zeros((nfold, n, X.shape[1]))
         counts = np.zeros((nfold, nseg))
-        np.add.at(counts, (fold[used], seg[used]), 1.0)
-        total = counts.sum(axis=0)
-        C = np.empty((nfold, n, X.shape[1]))
-        r = min(3, k - 1)
-        for f in range(nfold):
-            Hf = Ht - H[f] if nfold > 1 else Ht.copy()
-            cf = total - counts[f] if nfold > 1 else total
-            sparse = np.convolve((cf == 0).astype(float), np.ones(k))[:n] > 0
-            per_ctrl = max(float(np.sum(Hf[:, 0])) / n, 1e-12)
-            mu = np.where(row_weights(sparse, r + 1), SPARSE_SMOOTHNESS, DEFAULT_SMOOTHNESS) * per_ctrl
-            add_position_penalty(Hf, mu, r)
-            try:
-                C[f] = solve_banded_scalar(Hf, (rt - rhs[f]) if nfold > 1 else rt)
-            except np.linalg.LinAlgError:
-                # long stretches without data at a fine spacing: numerically singular, a
-                # spacing not to be chosen
-                C[f] = np.nan
-        return C, s, M, nseg, dt_
+        seg = np.empty(self.t.size, dtype=np.int64)
+        B = np.empty((self.t.size, k))
+        _kcv.fold_systems(s, self.w, fold, X, M, nseg, H, C, counts, seg, B)
+        # long stretches without data at a fine spacing are numerically singular (NaN): a
+        # spacing not to be chosen
+        _kcv.solve_folds(H, C.copy(), counts, _penalty(k), DEFAULT_SMOOTHNESS, SPARSE_SMOOTHNESS,
+                         np.empty((n, k)), C)
+        return C, s, seg, B, nseg, dt_
 
     def score(self, k, dt, fold):
-        C, s, M, nseg, _ = self.fit_folds(k, dt, fold, N_FOLDS)
+        C, _, seg, B, _, _ = self.fit_folds(k, dt, fold, N_FOLDS)
         e = np.empty(self.t.size)
-        _kf.fold_prediction_errors(s, fold, self.X, C, M, nseg, e)
+        _kcv.held_out_errors(fold, self.X, C, seg, B, e)
         total = float(np.sum(e[self.scored]))
-        return (total if np.isfinite(total) else np.inf), int(np.count_nonzero(self.scored))
+        return (total if np.isfinite(total) else np.inf), self.n_scored
 
     def derivative(self, k, dt, fold, nfold, r, X=None):
         """r-th derivative of the fits without each fold (nfold, N, d) at every sample."""
-        C, s, M, nseg, dt_ = self.fit_folds(k, dt, fold, nfold, X)
+        C, s, _, _, nseg, dt_ = self.fit_folds(k, dt, fold, nfold, X)
         out = np.empty((nfold, self.t.size, C.shape[2]))
+        M = blending_matrix(k)
         for f in range(nfold):
-            _kf.spline_derivative(s, C[f], M, nseg, 1.0 / dt_, r, out[f])
+            _kcv.derivative_at(s, C[f], M, nseg, 1.0 / dt_, r, out[f])
         return out
 
     def residual(self, k, dt):

@@ -1,0 +1,158 @@
+"""Kernels of the automatic knot choice: fold-wise fits of ordinary B-splines in one call.
+
+A cross-validated score at one (order, spacing) is one pass over the samples for the banded
+normal equations of every fold (the basis rows kept for the second pass), a banded Cholesky
+solve per fold with the training system (all folds but one) and its difference penalty, and
+one pass for the held-out prediction errors. Sums run in the order of the general fitting and
+evaluation kernels, so that exact input (where the scores are rounding noise) is scored alike.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .._jit import jit
+from .fit import band_cholesky_solve
+from .spline import basis_into
+
+
+@jit
+def _segment(s, nseg):
+    seg = int(math.floor(s))
+    if seg < 0:
+        seg = 0
+    elif seg > nseg - 1:
+        seg = nseg - 1
+    return seg, s - seg
+
+
+@jit
+def _values(M, u, out):
+    """``out[j] = sum_n M[j, n] u^n``, summed as :func:`basis_into` sums (same rounding)."""
+    k = M.shape[0]
+    for j in range(k):
+        s0 = 0.0
+        un = 1.0
+        for n in range(k):
+            if n >= 1:
+                un = un * u
+            s0 += M[j, n] * un
+        out[j] = s0
+
+
+@jit
+def fold_systems(s_all, w_all, fold, X, M, nseg, H, rhs, counts, seg_all, B):
+    """Per-fold normal equations: H (F, n, k) upper band, rhs (F, n, d), counts (F, nseg) of
+    samples with weight > 0; each sample's segment and basis row go to ``seg_all`` (N,) and
+    ``B`` (N, k) for the prediction pass."""
+    k = M.shape[0]
+    d = X.shape[1]
+    for m in range(s_all.shape[0]):
+        seg, u = _segment(s_all[m], nseg)
+        seg_all[m] = seg
+        b = B[m]
+        _values(M, u, b)
+        f = fold[m]
+        w = w_all[m]
+        if w > 0.0:
+            counts[f, seg] += 1.0
+        for a in range(k):
+            wa = w * b[a]
+            for c in range(k - a):
+                H[f, seg + a, c] += wa * b[a + c]
+            for z in range(d):
+                rhs[f, seg + a, z] += wa * X[m, z]
+
+
+@jit
+def solve_folds(H, rhs, counts, pen, mu_dense, mu_sparse, Hf, C):
+    """Training fits of every fold: control points ``C`` (F, n, d) (NaN where singular).
+
+    The training system of fold f is the sum of the other folds' (all of them when F = 1) plus
+    the difference penalty of coefficients ``pen`` (r + 1,) with per-row weight ``mu_sparse``
+    (rows touching a control point whose support has a training-free segment) or ``mu_dense``,
+    times the mean diagonal. ``Hf`` (n, k) scratch.
+    """
+    nf = H.shape[0]
+    n = H.shape[1]
+    k = H.shape[2]
+    d = rhs.shape[2]
+    nseg = counts.shape[1]
+    L = pen.shape[0]
+    sparse = np.zeros(n, dtype=np.bool_)
+    Ht = H[0].copy()
+    rt = rhs[0].copy()
+    for g in range(1, nf):
+        Ht += H[g]
+        rt += rhs[g]
+    for f in range(nf):
+        for i in range(n):
+            for c in range(k):
+                Hf[i, c] = Ht[i, c] - H[f, i, c] if nf > 1 else Ht[i, c]
+            for z in range(d):
+                C[f, i, z] = rt[i, z] - rhs[f, i, z] if nf > 1 else rt[i, z]
+        # control i is sparse if a segment i - k + 1 .. i without training samples is in its support
+        for i in range(n):
+            sparse[i] = False
+        for j in range(nseg):
+            cnt = 0.0
+            for g in range(nf):
+                if g != f or nf == 1:
+                    cnt += counts[g, j]
+            if cnt == 0.0:
+                for i in range(j, min(j + k, n)):
+                    sparse[i] = True
+        diag = 0.0
+        for i in range(n):
+            diag += Hf[i, 0]
+        per_ctrl = max(diag / n, 1e-12)
+        if L <= k and n >= L:
+            for j in range(n - L + 1):
+                any_sparse = False
+                for a in range(L):
+                    any_sparse = any_sparse or sparse[j + a]
+                mu = (mu_sparse if any_sparse else mu_dense) * per_ctrl
+                for a in range(L):
+                    for b in range(a, L):
+                        Hf[j + a, b - a] += mu * pen[a] * pen[b]
+        if not band_cholesky_solve(Hf, C[f]):
+            for i in range(n):
+                for z in range(d):
+                    C[f, i, z] = np.nan
+
+
+@jit
+def held_out_errors(fold, X, C, seg_all, B, out):
+    """``out[m] = |X_m - x_f(t_m)|^2``, ``x_f`` the fit without the sample's fold ``f = fold[m]``."""
+    k = B.shape[1]
+    d = X.shape[1]
+    for m in range(X.shape[0]):
+        f = fold[m]
+        seg = seg_all[m]
+        e2 = 0.0
+        for z in range(d):
+            acc = 0.0
+            for j in range(k):
+                acc += B[m, j] * C[f, seg + j, z]
+            e = X[m, z] - acc
+            e2 += e * e
+        out[m] = e2
+
+
+@jit
+def derivative_at(s_all, C, M, nseg, inv_dt, r, out):
+    """``out`` (N, d): the ``r``-th time derivative (0, 1, 2) of the spline of control points
+    C (n, d)."""
+    k = M.shape[0]
+    d = C.shape[1]
+    b = np.empty((3, k))
+    for m in range(s_all.shape[0]):
+        seg, u = _segment(s_all[m], nseg)
+        basis_into(M, u, inv_dt, b[0], b[1], b[2])
+        for z in range(d):
+            acc = 0.0
+            for j in range(k):
+                acc += b[r, j] * C[seg + j, z]
+            out[m, z] = acc
