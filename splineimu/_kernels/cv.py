@@ -14,8 +14,6 @@ import math
 import numpy as np
 
 from .._jit import jit
-from .fit import band_cholesky_solve
-from .spline import basis_into
 
 
 @jit
@@ -30,7 +28,7 @@ def _segment(s, nseg):
 
 @jit
 def _values(M, u, out):
-    """``out[j] = sum_n M[j, n] u^n``, summed as :func:`basis_into` sums (same rounding)."""
+    """``out[j] = sum_n M[j, n] u^n``, summed as :func:`.spline.basis_into` sums (same rounding)."""
     k = M.shape[0]
     for j in range(k):
         s0 = 0.0
@@ -49,21 +47,66 @@ def fold_systems(s_all, w_all, fold, X, M, nseg, H, rhs, counts, seg_all, B):
     ``B`` (N, k) for the prediction pass."""
     k = M.shape[0]
     d = X.shape[1]
+    pw = np.empty(k)
     for m in range(s_all.shape[0]):
         seg, u = _segment(s_all[m], nseg)
         seg_all[m] = seg
-        b = B[m]
-        _values(M, u, b)
+        un = 1.0
+        pw[0] = 1.0
+        for n in range(1, k):
+            un = un * u
+            pw[n] = un
+        for j in range(k):  # as basis_into sums
+            s0 = 0.0
+            for n in range(k):
+                s0 += M[j, n] * pw[n]
+            B[m, j] = s0
         f = fold[m]
         w = w_all[m]
         if w > 0.0:
             counts[f, seg] += 1.0
+        Hs = H[f]
+        Rs = rhs[f]
         for a in range(k):
-            wa = w * b[a]
+            wa = w * B[m, a]
             for c in range(k - a):
-                H[f, seg + a, c] += wa * b[a + c]
+                Hs[seg + a, c] += wa * B[m, a + c]
             for z in range(d):
-                rhs[f, seg + a, z] += wa * X[m, z]
+                Rs[seg + a, z] += wa * X[m, z]
+
+
+@jit
+def _band_cholesky_solve(A, B):
+    """:func:`.fit.band_cholesky_solve` with the loop bounds hoisted (same sums, same order)."""
+    n = A.shape[0]
+    w = A.shape[1]
+    m = B.shape[1]
+    for i in range(n):
+        for c in range(min(w, n - i)):
+            s = A[i, c]
+            for q in range(1, min(w - c - 1, i) + 1):
+                s -= A[i - q, q] * A[i - q, q + c]
+            if c == 0:
+                if not s > 0.0:
+                    return False
+                A[i, 0] = np.sqrt(s)
+            else:
+                A[i, c] = s / A[i, 0]
+    for i in range(n):
+        for q in range(1, min(w - 1, i) + 1):
+            a = A[i - q, q]
+            for z in range(m):
+                B[i, z] -= a * B[i - q, z]
+        for z in range(m):
+            B[i, z] = B[i, z] / A[i, 0]
+    for i in range(n - 1, -1, -1):
+        for c in range(1, min(w - 1, n - 1 - i) + 1):
+            a = A[i, c]
+            for z in range(m):
+                B[i, z] -= a * B[i + c, z]
+        for z in range(m):
+            B[i, z] = B[i, z] / A[i, 0]
+    return True
 
 
 @jit
@@ -117,7 +160,7 @@ def solve_folds(H, rhs, counts, pen, mu_dense, mu_sparse, Hf, C):
                 for a in range(L):
                     for b in range(a, L):
                         Hf[j + a, b - a] += mu * pen[a] * pen[b]
-        if not band_cholesky_solve(Hf, C[f]):
+        if not _band_cholesky_solve(Hf, C[f]):
             for i in range(n):
                 for z in range(d):
                     C[f, i, z] = np.nan
@@ -144,15 +187,31 @@ def held_out_errors(fold, X, C, seg_all, B, out):
 @jit
 def derivative_at(s_all, C, M, nseg, inv_dt, r, out):
     """``out`` (N, d): the ``r``-th time derivative (0, 1, 2) of the spline of control points
-    C (n, d)."""
+    C (n, d), the basis' derivative summed as :func:`.spline.basis_into` sums it."""
     k = M.shape[0]
     d = C.shape[1]
-    b = np.empty((3, k))
+    b = np.empty(k)
     for m in range(s_all.shape[0]):
         seg, u = _segment(s_all[m], nseg)
-        basis_into(M, u, inv_dt, b[0], b[1], b[2])
+        for j in range(k):
+            s0 = 0.0
+            un = 1.0  # u^n
+            um1 = 0.0  # u^(n-1)
+            um2 = 0.0  # u^(n-2)
+            for n in range(k):
+                if n >= 1:
+                    um2 = um1
+                    um1 = un
+                    un = un * u
+                if r == 0:
+                    s0 += M[j, n] * un
+                elif r == 1:
+                    s0 += M[j, n] * (n * um1)
+                else:
+                    s0 += M[j, n] * (n * (n - 1) * um2 if n >= 2 else 0.0)
+            b[j] = s0 if r == 0 else (s0 * inv_dt if r == 1 else s0 * inv_dt * inv_dt)
         for z in range(d):
             acc = 0.0
             for j in range(k):
-                acc += b[r, j] * C[seg + j, z]
+                acc += b[j] * C[seg + j, z]
             out[m, z] = acc

@@ -96,25 +96,34 @@ def max_rotation_spacing(t, R):
     n = t.size
     h = float(np.median(np.diff(t))) if n > 1 else 1.0
 
-    def turn(m):
+    Rf = np.ascontiguousarray(R).reshape(n, 9)
+
+    def within(m):
+        """Whether the input turns by at most the limit over every m poses; the angle comes from
+        the trace of the relative rotation, and from its Log (as the fit measures it) when
+        that is within 1e-6 rad of the limit."""
         # windows that span a gap are left out (the fit bridges gaps with the smoothest turn)
         ok = (t[m:] - t[:-m]) <= 1.5 * m * h + 2.0 * h
         if not ok.any():
-            return 0.0
-        ang = np.linalg.norm(lie.so3_log(np.matmul(np.swapaxes(R[:-m][ok], 1, 2), R[m:][ok])), axis=1)
-        return float(np.max(ang))
+            return True
+        tr = np.einsum("ij,ij->i", Rf[:-m][ok], Rf[m:][ok])
+        ang = float(np.arccos(np.clip((tr.min() - 1.0) / 2.0, -1.0, 1.0)))
+        if abs(ang - MAX_CONTROL_TURN_RAD) < 1e-6:
+            ang = float(np.max(np.linalg.norm(lie.so3_log(np.matmul(np.swapaxes(R[:-m][ok], 1, 2), R[m:][ok])),
+                                              axis=1)))
+        return ang <= MAX_CONTROL_TURN_RAD
 
-    if n < 2 or turn(1) > MAX_CONTROL_TURN_RAD:
+    if n < 2 or not within(1):
         return 0.7 * h
     m = 1
-    while 2 * m < n and turn(2 * m) <= MAX_CONTROL_TURN_RAD:
+    while 2 * m < n and within(2 * m):
         m *= 2
     if 2 * m >= n:
         return np.inf
-    lo_m, hi_m = m, 2 * m  # turn(lo_m) within, turn(hi_m) beyond
+    lo_m, hi_m = m, 2 * m  # within(lo_m), not within(hi_m)
     while hi_m - lo_m > max(1, lo_m // 8):
         mid = (lo_m + hi_m) // 2
-        lo_m, hi_m = (mid, hi_m) if turn(mid) <= MAX_CONTROL_TURN_RAD else (lo_m, mid)
+        lo_m, hi_m = (mid, hi_m) if within(mid) else (lo_m, mid)
     return lo_m * h
 
 
