@@ -71,6 +71,8 @@ _N_WINDOWS = 6
 #: in the first cross-validation pass.
 _STEP = 1.6
 _ORDER_PREFERENCE = 0.02
+#: Score ratio to the best beyond which finer grid spacings stop being scored (see _search).
+_PRUNE = 3.0
 #: The rotation spline's neighbouring control rotations may turn by at most this at the
 #: input's fastest rate (increments are taken as the shortest turn, below pi).
 MAX_CONTROL_TURN_RAD = np.pi / 3
@@ -229,7 +231,17 @@ def _search(windows, orders, grid, block, lo, hi=np.inf):
         return table[(k, dt)]
 
     for k in orders:
-        vals = [score(k, dt) for dt in grid]
+        # coarse to fine; the finest spacings (the costliest fits) are left out once two in a
+        # row have scored worse than their coarser neighbour and _PRUNE x the best so far
+        vals = np.full(len(grid), np.inf)
+        strikes = 0
+        for j in range(len(grid) - 1, -1, -1):
+            vals[j] = score(k, grid[j])
+            best = np.min(vals)
+            rising = j + 1 == len(grid) or not vals[j] <= vals[j + 1]
+            strikes = strikes + 1 if vals[j] > _PRUNE * best and rising else 0
+            if strikes == 2:
+                break
         i = int(np.argmin(vals))
         for dt in (grid[i] / np.sqrt(_STEP), grid[i] * np.sqrt(_STEP)):
             if lo <= dt <= hi:
