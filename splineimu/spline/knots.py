@@ -145,6 +145,7 @@ class _Window:
         lo, hi = t[0] + _END_FRACTION * (t[-1] - t[0]), t[-1] - _END_FRACTION * (t[-1] - t[0])
         self.scored = (t >= lo) & (t <= hi) & (w > 0)
         self.n_scored = int(np.count_nonzero(self.scored))
+        self.zero = np.zeros(n, dtype=np.int64)  # one fold
 
     def folds(self, block):
         return ((self.index // max(int(block), 1)) % N_FOLDS).astype(np.int64)
@@ -185,8 +186,7 @@ class _Window:
         return out
 
     def residual(self, k, dt):
-        zero = np.zeros(self.t.size, dtype=np.int64)
-        d = self.derivative(k, dt, zero, 1, 0)[0]
+        d = self.derivative(k, dt, self.zero, 1, 0)[0]
         return (self.X - d)[self.scored]
 
 
@@ -281,9 +281,8 @@ def _noise_surrogate(wd, k, dt_cv, seed=7):
     """
     rng = np.random.default_rng(seed)
     white = rng.normal(size=wd.X.shape)
-    zero = np.zeros(wd.t.size, dtype=np.int64)
     both = np.ascontiguousarray(np.hstack([wd.X, white]))
-    res = both - wd.derivative(k, dt_cv, zero, 1, 0, both)[0]
+    res = both - wd.derivative(k, dt_cv, wd.zero, 1, 0, both)[0]
     res -= res.mean(axis=0)
     n = res.shape[0]
     width = max(8, (n // 2) // 256)
@@ -316,6 +315,7 @@ def _ladder_errors(windows, k, ladder, noises, r):
     """
     var = np.zeros(len(ladder))
     bias2 = np.zeros(len(ladder))
+    both = [np.ascontiguousarray(np.hstack([wd.X, nz])) for wd, nz in zip(windows, noises)]
     ends = []
     prev = [None] * len(windows)
     for j, dt in enumerate(ladder):
@@ -323,15 +323,15 @@ def _ladder_errors(windows, k, ladder, noises, r):
         change = 0.0
         e_list = []
         for i, wd in enumerate(windows):
-            zero = np.zeros(wd.t.size, dtype=np.int64)
-            d = wd.derivative(k, dt, zero, 1, r, np.ascontiguousarray(np.hstack([wd.X, noises[i]])))[0]
+            d = wd.derivative(k, dt, wd.zero, 1, r, both[i])[0]
             e2 = np.sum(d[:, 3:] ** 2, axis=1)
             var[j] += float(np.sum(e2[wd.scored]))
-            nsc += int(np.count_nonzero(wd.scored))
+            nsc += wd.n_scored
+            ds = d[wd.scored]
             if prev[i] is not None:
-                D = d[wd.scored] - prev[i]
+                D = ds - prev[i]
                 change += float(np.sum(D[:, :3] ** 2) - np.sum(D[:, 3:] ** 2))
-            prev[i] = d[wd.scored]
+            prev[i] = ds
             e_list.append((wd.t, e2))
         var[j] = var[j] / max(nsc, 1) if np.isfinite(var[j]) else np.inf
         bias2[j] = max(change / max(nsc, 1), 0.0) if np.isfinite(change) else np.inf
