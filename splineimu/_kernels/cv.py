@@ -77,7 +77,8 @@ def fold_systems(s_all, w_all, fold, X, M, nseg, H, rhs, counts, seg_all, B):
 
 @jit
 def _band_cholesky_solve(A, B):
-    """:func:`.fit.band_cholesky_solve` with the loop bounds hoisted (same sums, same order)."""
+    """:func:`.fit.band_cholesky_solve` with each row's forward substitution right after its
+    factorization and the loop bounds hoisted (the same sums in the same order)."""
     n = A.shape[0]
     w = A.shape[1]
     m = B.shape[1]
@@ -92,20 +93,21 @@ def _band_cholesky_solve(A, B):
                 A[i, 0] = np.sqrt(s)
             else:
                 A[i, c] = s / A[i, 0]
-    for i in range(n):
-        for q in range(1, min(w - 1, i) + 1):
-            a = A[i - q, q]
-            for z in range(m):
-                B[i, z] -= a * B[i - q, z]
+        piv = A[i, 0]
+        qm = min(w - 1, i)
         for z in range(m):
-            B[i, z] = B[i, z] / A[i, 0]
+            s = B[i, z]
+            for q in range(1, qm + 1):
+                s -= A[i - q, q] * B[i - q, z]
+            B[i, z] = s / piv
     for i in range(n - 1, -1, -1):
-        for c in range(1, min(w - 1, n - 1 - i) + 1):
-            a = A[i, c]
-            for z in range(m):
-                B[i, z] -= a * B[i + c, z]
+        piv = A[i, 0]
+        cm = min(w - 1, n - 1 - i)
         for z in range(m):
-            B[i, z] = B[i, z] / A[i, 0]
+            s = B[i, z]
+            for c in range(1, cm + 1):
+                s -= A[i, c] * B[i + c, z]
+            B[i, z] = s / piv
     return True
 
 
