@@ -85,6 +85,11 @@ _ACF_LEVEL = 0.1
 
 
 @cache
+def _blending(k):
+    return blending_matrix(k)
+
+
+@cache
 def _penalty(k):
     """Coefficients of the difference penalty of an order-k fit (3rd differences at most)."""
     return difference_coefficients(min(3, k - 1))
@@ -108,8 +113,8 @@ def max_rotation_spacing(t, R):
         ok = (t[m:] - t[:-m]) <= 1.5 * m * h + 2.0 * h
         if not ok.any():
             return True
-        tr = np.einsum("ij,ij->i", Rf[:-m][ok], Rf[m:][ok])
-        ang = float(np.arccos(np.clip((tr.min() - 1.0) / 2.0, -1.0, 1.0)))
+        tr = np.einsum("ij,ij->i", Rf[:-m], Rf[m:])
+        ang = float(np.arccos(np.clip((np.min(tr[ok]) - 1.0) / 2.0, -1.0, 1.0)))
         if abs(ang - MAX_CONTROL_TURN_RAD) < 1e-6:
             ang = float(np.max(np.linalg.norm(lie.so3_log(np.matmul(np.swapaxes(R[:-m][ok], 1, 2), R[m:][ok])),
                                               axis=1)))
@@ -156,7 +161,7 @@ class _Window:
         X = self.X if X is None else X
         t0, dt_, nseg, n = layout(self.t[0], self.t[-1], dt, k)
         s = np.ascontiguousarray((self.t - t0) / dt_)
-        M = blending_matrix(k)
+        M = _blending(k)
         H = np.zeros((nfold, n, k))
         C = np.zeros((nfold, n, X.shape[1]))
         counts = np.zeros((nfold, nseg))
@@ -180,7 +185,7 @@ class _Window:
         """r-th derivative of the fits without each fold (nfold, N, d) at every sample."""
         C, s, _, _, nseg, dt_ = self.fit_folds(k, dt, fold, nfold, X)
         out = np.empty((nfold, self.t.size, C.shape[2]))
-        M = blending_matrix(k)
+        M = _blending(k)
         for f in range(nfold):
             _kcv.derivative_at(s, C[f], M, nseg, 1.0 / dt_, r, out[f])
         return out
