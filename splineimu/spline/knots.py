@@ -161,33 +161,32 @@ class _Window:
         X = self.X if X is None else X
         t0, dt_, nseg, n = layout(self.t[0], self.t[-1], dt, k)
         s = np.ascontiguousarray((self.t - t0) / dt_)
-        M = _blending(k)
+        sizes = (0.0,) * k, (0.0,) * X.shape[1]  # compile-time order and column count
         H = np.zeros((nfold, n, k))
         C = np.zeros((nfold, n, X.shape[1]))
         counts = np.zeros((nfold, nseg))
         seg = np.empty(self.t.size, dtype=np.int64)
         B = np.empty((self.t.size, k))
-        _kcv.fold_systems(s, self.w, fold, X, M, nseg, H, C, counts, seg, B)
+        _kcv.fold_systems(s, self.w, fold, X, _blending(k), nseg, H, C, counts, seg, B, *sizes)
         # long stretches without data at a fine spacing are numerically singular (NaN): a
         # spacing not to be chosen
         _kcv.solve_folds(H, C.copy(), counts, _penalty(k), DEFAULT_SMOOTHNESS, SPARSE_SMOOTHNESS,
-                         np.empty((n, k)), C)
-        return C, s, seg, B, nseg, dt_
+                         np.empty((n, k)), C, *sizes)
+        return C, s, seg, B, nseg, dt_, sizes
 
     def score(self, k, dt, fold):
-        C, _, seg, B, _, _ = self.fit_folds(k, dt, fold, N_FOLDS)
+        C, _, seg, B, _, _, sizes = self.fit_folds(k, dt, fold, N_FOLDS)
         e = np.empty(self.t.size)
-        _kcv.held_out_errors(fold, self.X, C, seg, B, e)
+        _kcv.held_out_errors(fold, self.X, C, seg, B, e, *sizes)
         total = float(np.sum(e[self.scored]))
         return (total if np.isfinite(total) else np.inf), self.n_scored
 
     def derivative(self, k, dt, fold, nfold, r, X=None):
         """r-th derivative of the fits without each fold (nfold, N, d) at every sample."""
-        C, s, _, _, nseg, dt_ = self.fit_folds(k, dt, fold, nfold, X)
+        C, s, _, _, nseg, dt_, sizes = self.fit_folds(k, dt, fold, nfold, X)
         out = np.empty((nfold, self.t.size, C.shape[2]))
-        M = _blending(k)
         for f in range(nfold):
-            _kcv.derivative_at(s, C[f], M, nseg, 1.0 / dt_, r, out[f])
+            _kcv.derivative_at(s, C[f], _blending(k), nseg, 1.0 / dt_, r, out[f], *sizes)
         return out
 
     def residual(self, k, dt):
