@@ -151,6 +151,19 @@ class _Window:
         self.scored = (t >= lo) & (t <= hi) & (w > 0)
         self.n_scored = int(np.count_nonzero(self.scored))
         self.zero = np.zeros(n, dtype=np.int64)  # one fold
+        self._buffers = {}
+
+    def _scratch(self, name, shape, dtype=np.float64, zero=False):
+        """A work array reused from call to call (valid until the next call with that name):
+        fresh large arrays would cost page faults at every fit."""
+        size = int(np.prod(shape))
+        buf = self._buffers.get(name)
+        if buf is None or buf.size < size:
+            buf = self._buffers[name] = np.empty(size + size // 4, dtype=dtype)
+        out = buf[:size].reshape(shape)
+        if zero:
+            out.fill(0)
+        return out
 
     def folds(self, block):
         return ((self.index // max(int(block), 1)) % N_FOLDS).astype(np.int64)
@@ -162,29 +175,31 @@ class _Window:
         t0, dt_, nseg, n = layout(self.t[0], self.t[-1], dt, k)
         s = np.ascontiguousarray((self.t - t0) / dt_)
         sizes = (0.0,) * k, (0.0,) * X.shape[1]  # compile-time order and column count
-        H = np.zeros((nfold, n, k))
-        C = np.zeros((nfold, n, X.shape[1]))
-        counts = np.zeros((nfold, nseg))
-        seg = np.empty(self.t.size, dtype=np.int64)
-        B = np.empty((self.t.size, k))
-        _kcv.fold_systems(s, self.w, fold, X, _blending(k), nseg, H, C, counts, seg, B, *sizes)
+        H = self._scratch("H", (nfold, n, k), zero=True)
+        rhs = self._scratch("rhs", (nfold, n, X.shape[1]), zero=True)
+        counts = self._scratch("counts", (nfold, nseg), zero=True)
+        seg = self._scratch("seg", (self.t.size,), np.int64)
+        B = self._scratch("B", (self.t.size, k))
+        _kcv.fold_systems(s, self.w, fold, X, _blending(k), nseg, H, rhs, counts, seg, B, *sizes)
         # long stretches without data at a fine spacing are numerically singular (NaN): a
         # spacing not to be chosen
-        _kcv.solve_folds(H, C.copy(), counts, _penalty(k), DEFAULT_SMOOTHNESS, SPARSE_SMOOTHNESS,
-                         np.empty((n, k)), C, *sizes)
+        C = self._scratch("C", (nfold, n, X.shape[1]))
+        _kcv.solve_folds(H, rhs, counts, _penalty(k), DEFAULT_SMOOTHNESS, SPARSE_SMOOTHNESS,
+                         self._scratch("Hf", (n, k)), C, *sizes)
         return C, s, seg, B, nseg, dt_, sizes
 
     def score(self, k, dt, fold):
         C, _, seg, B, _, _, sizes = self.fit_folds(k, dt, fold, N_FOLDS)
-        e = np.empty(self.t.size)
+        e = self._scratch("e", (self.t.size,))
         _kcv.held_out_errors(fold, self.X, C, seg, B, e, *sizes)
         total = float(np.sum(e[self.scored]))
         return (total if np.isfinite(total) else np.inf), self.n_scored
 
     def derivative(self, k, dt, fold, nfold, r, X=None):
-        """r-th derivative of the fits without each fold (nfold, N, d) at every sample."""
+        """r-th derivative of the fits without each fold (nfold, N, d) at every sample (valid
+        until the next call)."""
         C, s, _, _, nseg, dt_, sizes = self.fit_folds(k, dt, fold, nfold, X)
-        out = np.empty((nfold, self.t.size, C.shape[2]))
+        out = self._scratch("out", (nfold, self.t.size, C.shape[2]))
         for f in range(nfold):
             _kcv.derivative_at(s, C[f], _blending(k), nseg, 1.0 / dt_, r, out[f], *sizes)
         return out
