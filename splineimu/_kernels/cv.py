@@ -212,3 +212,61 @@ def derivative_at(s_all, C, M, nseg, inv_dt, r, out, kt, dt):
             for j in range(k):
                 acc += b[j] * C[seg + j, z]
             out[m, z] = acc
+
+
+# ------------------------------------------------------------------- ladder statistics
+@jit
+def pairwise_sum(a, lo, n):
+    """``numpy.sum`` of the contiguous ``a[lo:lo + n]``, bitwise: numpy's pairwise summation
+    (8 accumulators in blocks up to 128, halves above)."""
+    if n < 8:
+        res = 0.0
+        for i in range(n):
+            res += a[lo + i]
+        return res
+    if n <= 128:
+        r = np.empty(8)
+        for j in range(8):
+            r[j] = a[lo + j]
+        i = 8
+        while i < n - (n % 8):
+            for j in range(8):
+                r[j] += a[lo + i + j]
+            i += 8
+        res = ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]))
+        while i < n:
+            res += a[lo + i]
+            i += 1
+        return res
+    n2 = n // 2
+    n2 -= n2 % 8
+    return pairwise_sum(a, lo, n2) + pairwise_sum(a, lo + n2, n - n2)
+
+
+@jit
+def ladder_stats(d, idx, prev, has_prev, e2, ds, tmp):
+    """One rung of the derivative-error ladder: ``d`` (N, 6) the derivatives of the signal fit
+    (columns 0-2) and of the noise surrogate fit (3-5); ``idx`` the scored samples. Writes the
+    surrogate's squared derivative ``e2`` (N,) and the scored rows ``ds`` (len(idx), 6); returns
+    the sum of ``e2`` over the scored samples and, against the previous rung's scored rows
+    ``prev``, the change of the signal part less that of the surrogate (sum of squares), summed
+    as numpy sums them. ``tmp`` (3 len(idx),) scratch."""
+    n = d.shape[0]
+    ns = idx.shape[0]
+    for m in range(n):
+        e2[m] = (d[m, 3] * d[m, 3] + d[m, 4] * d[m, 4]) + d[m, 5] * d[m, 5]
+    for i in range(ns):
+        tmp[i] = e2[idx[i]]
+        for z in range(6):
+            ds[i, z] = d[idx[i], z]
+    var = pairwise_sum(tmp, 0, ns)
+    if not has_prev:
+        return var, 0.0
+    sums = np.zeros(2)
+    for part in range(2):
+        for i in range(ns):
+            for z in range(3):
+                D = ds[i, 3 * part + z] - prev[i, 3 * part + z]
+                tmp[3 * i + z] = D * D
+        sums[part] = pairwise_sum(tmp, 0, 3 * ns)
+    return var, sums[0] - sums[1]

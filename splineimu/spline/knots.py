@@ -335,6 +335,7 @@ def _ladder_errors(windows, k, ladder, noises, r):
     var = np.zeros(len(ladder))
     bias2 = np.zeros(len(ladder))
     both = [np.ascontiguousarray(np.hstack([wd.X, nz])) for wd, nz in zip(windows, noises)]
+    idx = [np.flatnonzero(wd.scored) for wd in windows]
     ends = []
     prev = [None] * len(windows)
     for j, dt in enumerate(ladder):
@@ -343,13 +344,14 @@ def _ladder_errors(windows, k, ladder, noises, r):
         e_list = []
         for i, wd in enumerate(windows):
             d = wd.derivative(k, dt, wd.zero, 1, r, both[i])[0]
-            e2 = np.sum(d[:, 3:] ** 2, axis=1)
-            var[j] += float(np.sum(e2[wd.scored]))
+            e2 = np.empty(wd.t.size)
+            ds = np.empty((idx[i].size, 6))
+            v, c = _kcv.ladder_stats(d, idx[i], ds if prev[i] is None else prev[i], prev[i] is not None, e2, ds,
+                                     wd._scratch("ladder", (3 * idx[i].size,)))
+            var[j] += v
             nsc += wd.n_scored
-            ds = d[wd.scored]
             if prev[i] is not None:
-                D = ds - prev[i]
-                change += float(np.sum(D[:, :3] ** 2) - np.sum(D[:, 3:] ** 2))
+                change += c
             prev[i] = ds
             e_list.append((wd.t, e2))
         var[j] = var[j] / max(nsc, 1) if np.isfinite(var[j]) else np.inf
