@@ -65,6 +65,34 @@ def fold_systems(s_all, w_all, fold, X, M, nseg, H, rhs, counts, seg_all, B, kt,
 
 
 @jit
+def pairwise_sum(a, lo, n):
+    """``numpy.sum`` of the contiguous ``a[lo:lo + n]``, bitwise: numpy's pairwise summation
+    (8 accumulators in blocks up to 128, halves above)."""
+    if n < 8:
+        res = 0.0
+        for i in range(n):
+            res += a[lo + i]
+        return res
+    if n <= 128:
+        r = np.empty(8)
+        for j in range(8):
+            r[j] = a[lo + j]
+        i = 8
+        while i < n - (n % 8):
+            for j in range(8):
+                r[j] += a[lo + i + j]
+            i += 8
+        res = ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]))
+        while i < n:
+            res += a[lo + i]
+            i += 1
+        return res
+    n2 = n // 2
+    n2 -= n2 % 8
+    return pairwise_sum(a, lo, n2) + pairwise_sum(a, lo + n2, n - n2)
+
+
+@jit
 def _band_cholesky_solve(A, B, kt, dt):
     """:func:`.fit.band_cholesky_solve` (band width k) with each row's forward substitution
     right after its factorization and the loop bounds hoisted: the same sums in the same order."""
@@ -122,6 +150,7 @@ def solve_folds(H, rhs, counts, pen, mu_dense, mu_sparse, Hf, C, kt, dt):
     nseg = counts.shape[1]
     L = pen.shape[0]
     sparse = np.zeros(n, dtype=np.bool_)
+    col = np.empty(n)
     Ht = H[0].copy()
     rt = rhs[0].copy()
     for g in range(1, nf):
@@ -144,10 +173,9 @@ def solve_folds(H, rhs, counts, pen, mu_dense, mu_sparse, Hf, C, kt, dt):
             if cnt == 0.0:
                 for i in range(j, min(j + k, n)):
                     sparse[i] = True
-        diag = 0.0
         for i in range(n):
-            diag += Hf[i, 0]
-        per_ctrl = max(diag / n, 1e-12)
+            col[i] = Hf[i, 0]
+        per_ctrl = max(pairwise_sum(col, 0, n) / n, 1e-12)
         if L <= k and n >= L:
             for j in range(n - L + 1):
                 any_sparse = False
@@ -215,34 +243,6 @@ def derivative_at(s_all, C, M, nseg, inv_dt, r, out, kt, dt):
 
 
 # ------------------------------------------------------------------- ladder statistics
-@jit
-def pairwise_sum(a, lo, n):
-    """``numpy.sum`` of the contiguous ``a[lo:lo + n]``, bitwise: numpy's pairwise summation
-    (8 accumulators in blocks up to 128, halves above)."""
-    if n < 8:
-        res = 0.0
-        for i in range(n):
-            res += a[lo + i]
-        return res
-    if n <= 128:
-        r = np.empty(8)
-        for j in range(8):
-            r[j] = a[lo + j]
-        i = 8
-        while i < n - (n % 8):
-            for j in range(8):
-                r[j] += a[lo + i + j]
-            i += 8
-        res = ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]))
-        while i < n:
-            res += a[lo + i]
-            i += 1
-        return res
-    n2 = n // 2
-    n2 -= n2 % 8
-    return pairwise_sum(a, lo, n2) + pairwise_sum(a, lo + n2, n - n2)
-
-
 @jit
 def ladder_stats(d, idx, prev, has_prev, e2, ds, tmp):
     """One rung of the derivative-error ladder: ``d`` (N, 6) the derivatives of the signal fit
