@@ -65,31 +65,71 @@ def fold_systems(s_all, w_all, fold, X, M, nseg, H, rhs, counts, seg_all, B, kt,
 
 
 @jit
-def pairwise_sum(a, lo, n):
-    """``numpy.sum`` of the contiguous ``a[lo:lo + n]``, bitwise: numpy's pairwise summation
-    (8 accumulators in blocks up to 128, halves above)."""
+def _block_sum(a, lo, n):
+    """numpy's pairwise-sum leaf (n <= 128): 8 accumulators, then the rest in order."""
     if n < 8:
         res = 0.0
         for i in range(n):
             res += a[lo + i]
         return res
+    r0, r1, r2, r3 = a[lo], a[lo + 1], a[lo + 2], a[lo + 3]
+    r4, r5, r6, r7 = a[lo + 4], a[lo + 5], a[lo + 6], a[lo + 7]
+    i = 8
+    while i < n - (n % 8):
+        r0 += a[lo + i]
+        r1 += a[lo + i + 1]
+        r2 += a[lo + i + 2]
+        r3 += a[lo + i + 3]
+        r4 += a[lo + i + 4]
+        r5 += a[lo + i + 5]
+        r6 += a[lo + i + 6]
+        r7 += a[lo + i + 7]
+        i += 8
+    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+    while i < n:
+        res += a[lo + i]
+        i += 1
+    return res
+
+
+@jit
+def pairwise_sum(a, lo, n):
+    """``numpy.sum`` of the contiguous ``a[lo:lo + n]``, bitwise: numpy's pairwise summation
+    (leaves of at most 128, split in halves rounded to 8 above), with an explicit stack (numba
+    does not cache recursive functions safely)."""
     if n <= 128:
-        r = np.empty(8)
-        for j in range(8):
-            r[j] = a[lo + j]
-        i = 8
-        while i < n - (n % 8):
-            for j in range(8):
-                r[j] += a[lo + i + j]
-            i += 8
-        res = ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]))
-        while i < n:
-            res += a[lo + i]
-            i += 1
-        return res
-    n2 = n // 2
-    n2 -= n2 % 8
-    return pairwise_sum(a, lo, n2) + pairwise_sum(a, lo + n2, n - n2)
+        return _block_sum(a, lo, n)
+    f_lo = np.empty(64, dtype=np.int64)
+    f_n = np.empty(64, dtype=np.int64)
+    f_stage = np.empty(64, dtype=np.int64)
+    vals = np.empty(64)
+    sp = 0
+    vp = 0
+    f_lo[0], f_n[0], f_stage[0] = lo, n, 0
+    sp = 1
+    while sp > 0:
+        top = sp - 1
+        lo_, n_ = f_lo[top], f_n[top]
+        if n_ <= 128:
+            vals[vp] = _block_sum(a, lo_, n_)
+            vp += 1
+            sp -= 1
+            continue
+        n2 = n_ // 2
+        n2 -= n2 % 8
+        if f_stage[top] == 0:
+            f_stage[top] = 1
+            f_lo[sp], f_n[sp], f_stage[sp] = lo_, n2, 0
+            sp += 1
+        elif f_stage[top] == 1:
+            f_stage[top] = 2
+            f_lo[sp], f_n[sp], f_stage[sp] = lo_ + n2, n_ - n2, 0
+            sp += 1
+        else:
+            vals[vp - 2] = vals[vp - 2] + vals[vp - 1]
+            vp -= 1
+            sp -= 1
+    return vals[0]
 
 
 @jit
