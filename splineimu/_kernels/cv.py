@@ -179,7 +179,7 @@ def solve_folds(H, rhs, counts, pen, mu_dense, mu_sparse, Hf, C, kt, dt):
     """Training fits of every fold: control points ``C`` (F, n, d) (NaN where singular).
 
     The training system of fold f is the sum of the other folds' (all of them when F = 1) plus
-    the difference penalty of coefficients ``pen`` (r + 1,) with per-row weight ``mu_sparse``
+    the difference penalty of coefficients ``pen`` (a tuple of r + 1) with per-row weight ``mu_sparse``
     (rows touching a control point whose support has a training-free segment) or ``mu_dense``,
     times the mean diagonal. ``Hf`` (n, k) scratch.
     """
@@ -188,9 +188,10 @@ def solve_folds(H, rhs, counts, pen, mu_dense, mu_sparse, Hf, C, kt, dt):
     k = len(kt)
     d = len(dt)
     nseg = counts.shape[1]
-    L = pen.shape[0]
+    L = len(pen)
     sparse = np.zeros(n, dtype=np.bool_)
     col = np.empty(n)
+    prod = np.empty((2, L, L))
     Ht = H[0].copy()
     rt = rhs[0].copy()
     for g in range(1, nf):
@@ -217,14 +218,21 @@ def solve_folds(H, rhs, counts, pen, mu_dense, mu_sparse, Hf, C, kt, dt):
             col[i] = Hf[i, 0]
         per_ctrl = max(pairwise_sum(col, 0, n) / n, 1e-12)
         if L <= k and n >= L:
+            # the two row weights' products mu pen[a] pen[b], rounded as each row would round them
+            m0 = mu_dense * per_ctrl
+            m1 = mu_sparse * per_ctrl
+            for a in range(L):
+                for b in range(L):
+                    prod[0, a, b] = m0 * pen[a] * pen[b]
+                    prod[1, a, b] = m1 * pen[a] * pen[b]
             for j in range(n - L + 1):
-                any_sparse = False
+                any_sparse = 0
                 for a in range(L):
-                    any_sparse = any_sparse or sparse[j + a]
-                mu = (mu_sparse if any_sparse else mu_dense) * per_ctrl
+                    if sparse[j + a]:
+                        any_sparse = 1
                 for a in range(L):
                     for b in range(a, L):
-                        Hf[j + a, b - a] += mu * pen[a] * pen[b]
+                        Hf[j + a, b - a] += prod[any_sparse, a, b]
         if not _band_cholesky_solve(Hf, C[f], kt, dt):
             for i in range(n):
                 for z in range(d):

@@ -91,8 +91,9 @@ def _blending(k):
 
 @cache
 def _penalty(k):
-    """Coefficients of the difference penalty of an order-k fit (3rd differences at most)."""
-    return difference_coefficients(min(3, k - 1))
+    """Coefficients of the difference penalty of an order-k fit (3rd differences at most), as
+    a tuple (its length is compiled in)."""
+    return tuple(float(c) for c in difference_coefficients(min(3, k - 1)))
 
 
 def max_rotation_spacing(t, R):
