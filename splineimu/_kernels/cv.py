@@ -240,11 +240,13 @@ def solve_folds(H, rhs, counts, pen, mu_dense, mu_sparse, Hf, C, kt, dt):
 
 
 @jit
-def held_out_errors(fold, X, C, seg_all, B, out, kt, dt):
-    """``out[m] = |X_m - x_f(t_m)|^2``, ``x_f`` the fit without the sample's fold ``f = fold[m]``."""
+def held_out_error(fold, X, C, seg_all, B, idx, tmp, kt, dt):
+    """Sum over the samples ``idx`` of ``|X_m - x_f(t_m)|^2``, ``x_f`` the fit without the
+    sample's fold ``f = fold[m]``, summed as numpy sums ``e[idx]``. ``tmp`` (len(idx),) scratch."""
     k = len(kt)
     d = len(dt)
-    for m in range(X.shape[0]):
+    for i in range(idx.shape[0]):
+        m = idx[i]
         f = fold[m]
         seg = seg_all[m]
         e2 = 0.0
@@ -254,7 +256,8 @@ def held_out_errors(fold, X, C, seg_all, B, out, kt, dt):
                 acc += B[m, j] * C[f, seg + j, z]
             e = X[m, z] - acc
             e2 += e * e
-        out[m] = e2
+        tmp[i] = e2
+    return pairwise_sum(tmp, 0, idx.shape[0])
 
 
 @jit

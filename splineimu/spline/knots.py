@@ -150,7 +150,8 @@ class _Window:
         self.index = np.arange(n)
         lo, hi = t[0] + _END_FRACTION * (t[-1] - t[0]), t[-1] - _END_FRACTION * (t[-1] - t[0])
         self.scored = (t >= lo) & (t <= hi) & (w > 0)
-        self.n_scored = int(np.count_nonzero(self.scored))
+        self.scored_index = np.flatnonzero(self.scored)
+        self.n_scored = int(self.scored_index.size)
         self.zero = np.zeros(n, dtype=np.int64)  # one fold
         self._buffers = {}
 
@@ -191,9 +192,8 @@ class _Window:
 
     def score(self, k, dt, fold):
         C, _, seg, B, _, _, sizes = self.fit_folds(k, dt, fold, N_FOLDS)
-        e = self._scratch("e", (self.t.size,))
-        _kcv.held_out_errors(fold, self.X, C, seg, B, e, *sizes)
-        total = float(np.sum(e[self.scored]))
+        total = _kcv.held_out_error(fold, self.X, C, seg, B, self.scored_index, self._scratch("e", (self.t.size,)),
+                                    *sizes)
         return (total if np.isfinite(total) else np.inf), self.n_scored
 
     def derivative(self, k, dt, fold, nfold, r, X=None):
@@ -225,9 +225,10 @@ def _correlation_lag(res):
     n = x.shape[0]
     if n < 8:
         return 1
-    nfft = 1 << int(np.ceil(np.log2(2 * n)))
+    lags = min(n // 4, 400)
+    nfft = 1 << int(np.ceil(np.log2(n + lags)))  # zero padding beyond the lags kept: no wrap-around
     F = np.fft.rfft(x, nfft, axis=0)
-    acf = np.fft.irfft((np.abs(F) ** 2).sum(axis=1), nfft)[: min(n // 4, 400)]
+    acf = np.fft.irfft((np.abs(F) ** 2).sum(axis=1), nfft)[:lags]
     if acf[0] <= 0:
         return 1
     below = np.flatnonzero(acf / acf[0] < _ACF_LEVEL)
@@ -336,7 +337,7 @@ def _ladder_errors(windows, k, ladder, noises, r):
     var = np.zeros(len(ladder))
     bias2 = np.zeros(len(ladder))
     both = [np.ascontiguousarray(np.hstack([wd.X, nz])) for wd, nz in zip(windows, noises)]
-    idx = [np.flatnonzero(wd.scored) for wd in windows]
+    idx = [wd.scored_index for wd in windows]
     ends = []
     prev = [None] * len(windows)
     for j, dt in enumerate(ladder):
