@@ -46,10 +46,10 @@ row score worse than their coarser neighbour and 3x the best. Inputs longer than
 property), so the choice costs the same for a minute and for an hour. Measured (12k poses,
 benchmarks/bench_knots.py): ~1.6x scipy's interpolation of the same poses, a third of what it
 was; the kernels sum in the order of the fitting kernels and of numpy, so the choices are those
-of the implementation they replaced (its reported figures to ~1e-13 on noisy and real poses; on
-exact poses, whose scores are rounding noise, those noise levels by a few percent). Going
-further means fewer fits (candidates from tabulated transfer functions), which moves the flat
-cross-validation optima by a grid step.
+of the implementation they replaced (its reported figures to 1e-13 on noisy and real poses, to
+1e-9 on exact poses, whose scores are rounding noise). Going further means fewer fits
+(candidates from tabulated transfer functions), which moves the flat cross-validation optima by
+a grid step.
 
 Where it fails: noise correlated over longer than the motion's own time scale is motion to
 any method that sees only the poses (it is kept); noise whose level changes along the
