@@ -189,7 +189,7 @@ def solve_folds(H, rhs, counts, pen, mu_dense, mu_sparse, Hf, C, kt, dt):
     d = len(dt)
     nseg = counts.shape[1]
     L = len(pen)
-    sparse = np.zeros(n, dtype=np.bool_)
+    zero_segs = np.empty(nseg + 1, dtype=np.int64)  # training-free segments before each segment
     col = np.empty(n)
     prod = np.empty((2, L, L))
     Ht = H[0].copy()
@@ -201,21 +201,16 @@ def solve_folds(H, rhs, counts, pen, mu_dense, mu_sparse, Hf, C, kt, dt):
         for i in range(n):
             for c in range(k):
                 Hf[i, c] = Ht[i, c] - H[f, i, c] if nf > 1 else Ht[i, c]
+            col[i] = Hf[i, 0]
             for z in range(d):
                 C[f, i, z] = rt[i, z] - rhs[f, i, z] if nf > 1 else rt[i, z]
-        # control i is sparse if a segment i - k + 1 .. i without training samples is in its support
-        for i in range(n):
-            sparse[i] = False
+        zero_segs[0] = 0
         for j in range(nseg):
             cnt = 0.0
             for g in range(nf):
                 if g != f or nf == 1:
                     cnt += counts[g, j]
-            if cnt == 0.0:
-                for i in range(j, min(j + k, n)):
-                    sparse[i] = True
-        for i in range(n):
-            col[i] = Hf[i, 0]
+            zero_segs[j + 1] = zero_segs[j] + (1 if cnt == 0.0 else 0)
         per_ctrl = max(pairwise_sum(col, 0, n) / n, 1e-12)
         if L <= k and n >= L:
             # the two row weights' products mu pen[a] pen[b], rounded as each row would round them
@@ -226,10 +221,11 @@ def solve_folds(H, rhs, counts, pen, mu_dense, mu_sparse, Hf, C, kt, dt):
                     prod[0, a, b] = m0 * pen[a] * pen[b]
                     prod[1, a, b] = m1 * pen[a] * pen[b]
             for j in range(n - L + 1):
-                any_sparse = 0
-                for a in range(L):
-                    if sparse[j + a]:
-                        any_sparse = 1
+                # row j touches controls j .. j + L - 1, whose supports span segments j - k + 1 ..
+                # j + L - 1: sparse if one of those has no training samples
+                lo = max(j - k + 1, 0)
+                hi = min(j + L - 1, nseg - 1)
+                any_sparse = 1 if hi >= lo and zero_segs[hi + 1] > zero_segs[lo] else 0
                 for a in range(L):
                     for b in range(a, L):
                         Hf[j + a, b - a] += prod[any_sparse, a, b]
