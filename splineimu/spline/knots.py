@@ -37,9 +37,19 @@ Method
    opposite turn.
 
 Cost: per (order, spacing) one pass over the poses for the normal equations of all folds,
-banded Cholesky solves of the control-point size and one pass for the predictions; inputs
-longer than :data:`MAX_CV_POSES` are cross-validated on evenly spread windows (the spacing is
-a local property), so the choice costs the same for a minute and for an hour.
+banded Cholesky solves of the control-point size and one pass for the predictions, each one
+kernel call (:mod:`splineimu._kernels.cv`, compiled per order, work arrays reused); about 60
+cross-validated and 30 ladder fits per choice. The grid is scored coarse to fine and stops
+before its finest spacings (the costliest fits, more control points than poses) once two in a
+row score worse than their coarser neighbour and 3x the best. Inputs longer than
+:data:`MAX_CV_POSES` are cross-validated on evenly spread windows (the spacing is a local
+property), so the choice costs the same for a minute and for an hour. Measured (12k poses,
+benchmarks/bench_knots.py): ~1.6x scipy's interpolation of the same poses, a third of what it
+was; the kernels sum in the order of the fitting kernels and of numpy, so the choices are those
+of the implementation they replaced (its reported figures to 1e-13 on noisy and real poses, to
+1e-9 on exact poses, whose scores are rounding noise). Going further means fewer fits
+(candidates from tabulated transfer functions), which moves the flat cross-validation optima by
+a grid step.
 
 Where it fails: noise correlated over longer than the motion's own time scale is motion to
 any method that sees only the poses (it is kept); noise whose level changes along the
@@ -52,18 +62,13 @@ neither noise nor motion is taken as noise-limited.
 
 from __future__ import annotations
 
+from functools import cache
+
 import numpy as np
 
 from .. import lie
-from .._kernels import fit as _kf
-from .banded import (
-    DEFAULT_SMOOTHNESS,
-    SPARSE_SMOOTHNESS,
-    add_position_penalty,
-    layout,
-    row_weights,
-    solve_banded_scalar,
-)
+from .._kernels import cv as _kcv
+from .banded import DEFAULT_SMOOTHNESS, SPARSE_SMOOTHNESS, difference_coefficients, layout
 from .basis import blending_matrix
 from .report import WARN_ACCEL_M_S2, WARN_GYRO_RAD_S, FitWarning
 
@@ -76,6 +81,8 @@ _N_WINDOWS = 6
 #: in the first cross-validation pass.
 _STEP = 1.6
 _ORDER_PREFERENCE = 0.02
+#: Score ratio to the best beyond which finer grid spacings stop being scored (see _search).
+_PRUNE = 3.0
 #: The rotation spline's neighbouring control rotations may turn by at most this at the
 #: input's fastest rate (increments are taken as the shortest turn, below pi).
 MAX_CONTROL_TURN_RAD = np.pi / 3
@@ -87,6 +94,18 @@ _END_FRACTION = 0.05
 _ACF_LEVEL = 0.1
 
 
+@cache
+def _blending(k):
+    return blending_matrix(k)
+
+
+@cache
+def _penalty(k):
+    """Coefficients of the difference penalty of an order-k fit (3rd differences at most), as
+    a tuple (its length is compiled in)."""
+    return tuple(float(c) for c in difference_coefficients(min(3, k - 1)))
+
+
 def max_rotation_spacing(t, R):
     """Largest rotation knot spacing over which the input turns by at most
     :data:`MAX_CONTROL_TURN_RAD` anywhere (neighbouring control rotations must stay well within
@@ -95,25 +114,34 @@ def max_rotation_spacing(t, R):
     n = t.size
     h = float(np.median(np.diff(t))) if n > 1 else 1.0
 
-    def turn(m):
+    Rf = np.ascontiguousarray(R).reshape(n, 9)
+
+    def within(m):
+        """Whether the input turns by at most the limit over every m poses; the angle comes from
+        the trace of the relative rotation, and from its Log (as the fit measures it) when
+        that is within 1e-6 rad of the limit."""
         # windows that span a gap are left out (the fit bridges gaps with the smoothest turn)
         ok = (t[m:] - t[:-m]) <= 1.5 * m * h + 2.0 * h
         if not ok.any():
-            return 0.0
-        ang = np.linalg.norm(lie.so3_log(np.matmul(np.swapaxes(R[:-m][ok], 1, 2), R[m:][ok])), axis=1)
-        return float(np.max(ang))
+            return True
+        tr = np.einsum("ij,ij->i", Rf[:-m], Rf[m:])
+        ang = float(np.arccos(np.clip((np.min(tr[ok]) - 1.0) / 2.0, -1.0, 1.0)))
+        if abs(ang - MAX_CONTROL_TURN_RAD) < 1e-6:
+            ang = float(np.max(np.linalg.norm(lie.so3_log(np.matmul(np.swapaxes(R[:-m][ok], 1, 2), R[m:][ok])),
+                                              axis=1)))
+        return ang <= MAX_CONTROL_TURN_RAD
 
-    if n < 2 or turn(1) > MAX_CONTROL_TURN_RAD:
+    if n < 2 or not within(1):
         return 0.7 * h
     m = 1
-    while 2 * m < n and turn(2 * m) <= MAX_CONTROL_TURN_RAD:
+    while 2 * m < n and within(2 * m):
         m *= 2
     if 2 * m >= n:
         return np.inf
-    lo_m, hi_m = m, 2 * m  # turn(lo_m) within, turn(hi_m) beyond
+    lo_m, hi_m = m, 2 * m  # within(lo_m), not within(hi_m)
     while hi_m - lo_m > max(1, lo_m // 8):
         mid = (lo_m + hi_m) // 2
-        lo_m, hi_m = (mid, hi_m) if turn(mid) <= MAX_CONTROL_TURN_RAD else (lo_m, mid)
+        lo_m, hi_m = (mid, hi_m) if within(mid) else (lo_m, mid)
     return lo_m * h
 
 
@@ -132,61 +160,63 @@ class _Window:
         self.index = np.arange(n)
         lo, hi = t[0] + _END_FRACTION * (t[-1] - t[0]), t[-1] - _END_FRACTION * (t[-1] - t[0])
         self.scored = (t >= lo) & (t <= hi) & (w > 0)
+        self.scored_index = np.flatnonzero(self.scored)
+        self.n_scored = int(self.scored_index.size)
+        self.zero = np.zeros(n, dtype=np.int64)  # one fold
+        self._buffers = {}
+
+    def _scratch(self, name, shape, dtype=np.float64, zero=False):
+        """A work array reused from call to call (valid until the next call with that name):
+        fresh large arrays would cost page faults at every fit."""
+        size = int(np.prod(shape))
+        buf = self._buffers.get(name)
+        if buf is None or buf.size < size:
+            buf = self._buffers[name] = np.empty(size + size // 4, dtype=dtype)
+        out = buf[:size].reshape(shape)
+        if zero:
+            out.fill(0)
+        return out
 
     def folds(self, block):
         return ((self.index // max(int(block), 1)) % N_FOLDS).astype(np.int64)
 
     def fit_folds(self, k, dt, fold, nfold, X=None):
         """Control points (nfold, n, d) of the fits of X (default: the signal) without each
-        fold, and the layout."""
+        fold, the samples' spline parameters, segments and basis rows, and the layout."""
         X = self.X if X is None else X
         t0, dt_, nseg, n = layout(self.t[0], self.t[-1], dt, k)
         s = np.ascontiguousarray((self.t - t0) / dt_)
-        M = blending_matrix(k)
-        H = np.zeros((nfold, n, k))
-        rhs = np.zeros((nfold, n, X.shape[1]))
-        _kf.fold_normal_equations(s, self.w, fold, X, M, nseg, H, rhs)
-        Ht, rt = H.sum(axis=0), rhs.sum(axis=0)
-        seg = np.clip(np.floor(s).astype(np.int64), 0, nseg - 1)
-        used = self.w > 0
-        counts = np.zeros((nfold, nseg))
-        np.add.at(counts, (fold[used], seg[used]), 1.0)
-        total = counts.sum(axis=0)
-        C = np.empty((nfold, n, X.shape[1]))
-        r = min(3, k - 1)
-        for f in range(nfold):
-            Hf = Ht - H[f] if nfold > 1 else Ht.copy()
-            cf = total - counts[f] if nfold > 1 else total
-            sparse = np.convolve((cf == 0).astype(float), np.ones(k))[:n] > 0
-            per_ctrl = max(float(np.sum(Hf[:, 0])) / n, 1e-12)
-            mu = np.where(row_weights(sparse, r + 1), SPARSE_SMOOTHNESS, DEFAULT_SMOOTHNESS) * per_ctrl
-            add_position_penalty(Hf, mu, r)
-            try:
-                C[f] = solve_banded_scalar(Hf, (rt - rhs[f]) if nfold > 1 else rt)
-            except np.linalg.LinAlgError:
-                # long stretches without data at a fine spacing: numerically singular, a
-                # spacing not to be chosen
-                C[f] = np.nan
-        return C, s, M, nseg, dt_
+        sizes = (0.0,) * k, (0.0,) * X.shape[1]  # compile-time order and column count
+        H = self._scratch("H", (nfold, n, k), zero=True)
+        rhs = self._scratch("rhs", (nfold, n, X.shape[1]), zero=True)
+        counts = self._scratch("counts", (nfold, nseg), zero=True)
+        seg = self._scratch("seg", (self.t.size,), np.int64)
+        B = self._scratch("B", (self.t.size, k))
+        _kcv.fold_systems(s, self.w, fold, X, _blending(k), nseg, H, rhs, counts, seg, B, *sizes)
+        # long stretches without data at a fine spacing are numerically singular (NaN): a
+        # spacing not to be chosen
+        C = self._scratch("C", (nfold, n, X.shape[1]))
+        _kcv.solve_folds(H, rhs, counts, _penalty(k), DEFAULT_SMOOTHNESS, SPARSE_SMOOTHNESS,
+                         self._scratch("Hf", (n, k)), C, *sizes)
+        return C, s, seg, B, nseg, dt_, sizes
 
     def score(self, k, dt, fold):
-        C, s, M, nseg, _ = self.fit_folds(k, dt, fold, N_FOLDS)
-        e = np.empty(self.t.size)
-        _kf.fold_prediction_errors(s, fold, self.X, C, M, nseg, e)
-        total = float(np.sum(e[self.scored]))
-        return (total if np.isfinite(total) else np.inf), int(np.count_nonzero(self.scored))
+        C, _, seg, B, _, _, sizes = self.fit_folds(k, dt, fold, N_FOLDS)
+        total = _kcv.held_out_error(fold, self.X, C, seg, B, self.scored_index, self._scratch("e", (self.t.size,)),
+                                    *sizes)
+        return (total if np.isfinite(total) else np.inf), self.n_scored
 
     def derivative(self, k, dt, fold, nfold, r, X=None):
-        """r-th derivative of the fits without each fold (nfold, N, d) at every sample."""
-        C, s, M, nseg, dt_ = self.fit_folds(k, dt, fold, nfold, X)
-        out = np.empty((nfold, self.t.size, C.shape[2]))
+        """r-th derivative of the fits without each fold (nfold, N, d) at every sample (valid
+        until the next call)."""
+        C, s, _, _, nseg, dt_, sizes = self.fit_folds(k, dt, fold, nfold, X)
+        out = self._scratch("out", (nfold, self.t.size, C.shape[2]))
         for f in range(nfold):
-            _kf.spline_derivative(s, C[f], M, nseg, 1.0 / dt_, r, out[f])
+            _kcv.derivative_at(s, C[f], _blending(k), nseg, 1.0 / dt_, r, out[f], *sizes)
         return out
 
     def residual(self, k, dt):
-        zero = np.zeros(self.t.size, dtype=np.int64)
-        d = self.derivative(k, dt, zero, 1, 0)[0]
+        d = self.derivative(k, dt, self.zero, 1, 0)[0]
         return (self.X - d)[self.scored]
 
 
@@ -205,9 +235,10 @@ def _correlation_lag(res):
     n = x.shape[0]
     if n < 8:
         return 1
-    nfft = 1 << int(np.ceil(np.log2(2 * n)))
+    lags = min(n // 4, 400)
+    nfft = 1 << int(np.ceil(np.log2(n + lags)))  # zero padding beyond the lags kept: no wrap-around
     F = np.fft.rfft(x, nfft, axis=0)
-    acf = np.fft.irfft((np.abs(F) ** 2).sum(axis=1), nfft)[: min(n // 4, 400)]
+    acf = np.fft.irfft((np.abs(F) ** 2).sum(axis=1), nfft)[:lags]
     if acf[0] <= 0:
         return 1
     below = np.flatnonzero(acf / acf[0] < _ACF_LEVEL)
@@ -231,7 +262,17 @@ def _search(windows, orders, grid, block, lo, hi=np.inf):
         return table[(k, dt)]
 
     for k in orders:
-        vals = [score(k, dt) for dt in grid]
+        # coarse to fine; the finest spacings (the costliest fits) are left out once two in a
+        # row have scored worse than their coarser neighbour and _PRUNE x the best so far
+        vals = np.full(len(grid), np.inf)
+        strikes = 0
+        for j in range(len(grid) - 1, -1, -1):
+            vals[j] = score(k, grid[j])
+            best = np.min(vals)
+            rising = j + 1 == len(grid) or not vals[j] <= vals[j + 1]
+            strikes = strikes + 1 if vals[j] > _PRUNE * best and rising else 0
+            if strikes == 2:
+                break
         i = int(np.argmin(vals))
         for dt in (grid[i] / np.sqrt(_STEP), grid[i] * np.sqrt(_STEP)):
             if lo <= dt <= hi:
@@ -271,9 +312,8 @@ def _noise_surrogate(wd, k, dt_cv, seed=7):
     """
     rng = np.random.default_rng(seed)
     white = rng.normal(size=wd.X.shape)
-    zero = np.zeros(wd.t.size, dtype=np.int64)
     both = np.ascontiguousarray(np.hstack([wd.X, white]))
-    res = both - wd.derivative(k, dt_cv, zero, 1, 0, both)[0]
+    res = both - wd.derivative(k, dt_cv, wd.zero, 1, 0, both)[0]
     res -= res.mean(axis=0)
     n = res.shape[0]
     width = max(8, (n // 2) // 256)
@@ -306,6 +346,8 @@ def _ladder_errors(windows, k, ladder, noises, r):
     """
     var = np.zeros(len(ladder))
     bias2 = np.zeros(len(ladder))
+    both = [np.ascontiguousarray(np.hstack([wd.X, nz])) for wd, nz in zip(windows, noises)]
+    idx = [wd.scored_index for wd in windows]
     ends = []
     prev = [None] * len(windows)
     for j, dt in enumerate(ladder):
@@ -313,15 +355,16 @@ def _ladder_errors(windows, k, ladder, noises, r):
         change = 0.0
         e_list = []
         for i, wd in enumerate(windows):
-            zero = np.zeros(wd.t.size, dtype=np.int64)
-            d = wd.derivative(k, dt, zero, 1, r, np.ascontiguousarray(np.hstack([wd.X, noises[i]])))[0]
-            e2 = np.sum(d[:, 3:] ** 2, axis=1)
-            var[j] += float(np.sum(e2[wd.scored]))
-            nsc += int(np.count_nonzero(wd.scored))
+            d = wd.derivative(k, dt, wd.zero, 1, r, both[i])[0]
+            e2 = np.empty(wd.t.size)
+            ds = np.empty((idx[i].size, 6))
+            v, c = _kcv.ladder_stats(d, idx[i], ds if prev[i] is None else prev[i], prev[i] is not None, e2, ds,
+                                     wd._scratch("ladder", (3 * idx[i].size,)))
+            var[j] += v
+            nsc += wd.n_scored
             if prev[i] is not None:
-                D = d[wd.scored] - prev[i]
-                change += float(np.sum(D[:, :3] ** 2) - np.sum(D[:, 3:] ** 2))
-            prev[i] = d[wd.scored]
+                change += c
+            prev[i] = ds
             e_list.append((wd.t, e2))
         var[j] = var[j] / max(nsc, 1) if np.isfinite(var[j]) else np.inf
         bias2[j] = max(change / max(nsc, 1), 0.0) if np.isfinite(change) else np.inf
