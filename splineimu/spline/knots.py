@@ -83,6 +83,8 @@ MAX_CONTROL_TURN_RAD = np.pi / 3
 _LADDER = 1.25
 #: Fraction of each window's span at both ends left out of the score (one-sided data).
 _END_FRACTION = 0.05
+#: Most rungs the ladder is walked on past either end while its smallest error sits there.
+_WALK_RUNGS = 8
 #: The residual autocorrelation below which noise counts as uncorrelated.
 _ACF_LEVEL = 0.1
 
@@ -329,6 +331,39 @@ def _ladder_errors(windows, k, ladder, noises, r):
     return var[1:], bias2[1:], ends[1:]
 
 
+def _walk_ladder(windows, k, ladder, noises, r, lo, hi):
+    """:func:`_ladder_errors` on ``ladder``, walked on two rungs at a time past whichever end
+    holds the smallest predicted error while the error falls toward it (at most
+    :data:`_WALK_RUNGS` rungs each way, within [lo, hi]): the derivative's optimum can lie
+    several rungs from the value-optimal spacing the ladder is centred on. Returns the ladder
+    and the errors of its rungs above the first."""
+    var, bias2, ends = _ladder_errors(windows, k, ladder, noises, r)
+    up = down = 0
+    while var.size >= 3:
+        e = var + bias2
+        j = int(np.argmin(e))
+        # only a trend is followed: the error falls over the two rungs next to that end (a
+        # single rung's scatter in the prediction is no reason to leave the ladder)
+        if j == var.size - 1 and e[-3] > e[-2] and up < _WALK_RUNGS:
+            more = ladder[-1] * _LADDER ** np.arange(3)
+            more = more[more <= hi * (1.0 + 1e-9)]
+        elif j == 0 and e[2] > e[1] and down < _WALK_RUNGS:
+            more = ladder[0] * _LADDER ** np.arange(-2, 1)
+            more = more[max(int(np.argmax(more >= lo * 0.99)) - 1, 0):] if more[-1] >= lo * 0.99 else more[:1]
+        else:
+            break
+        if more.size < 2:
+            break
+        v, b, en = _ladder_errors(windows, k, more, noises, r)
+        if j == var.size - 1:
+            up += v.size
+            ladder, var, bias2, ends = np.r_[ladder, more[1:]], np.r_[var, v], np.r_[bias2, b], ends + en
+        else:
+            down += v.size
+            ladder, var, bias2, ends = np.r_[more, ladder[1:]], np.r_[v, var], np.r_[b, bias2], en + ends
+    return ladder, var, bias2, ends
+
+
 def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf):
     """Order and spacing (at most ``dt_max``) for an ordinary B-spline fit of signal X (N, 3)
     whose r-th derivative matters; returns a dict (see :func:`choose_knot_spacing`)."""
@@ -371,8 +406,17 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf):
         dt_cv = min((v, dt) for (kk, dt), v in table.items() if kk == k)[1]
         steps = np.arange(-1, 1) if dt_fixed is not None else (np.arange(-4, 1) if limited else np.arange(-2, 3))
         ladder = dt_cv * _LADDER ** steps
-        ladder = np.r_[ladder[0], ladder[1:][(ladder[1:] >= lo * 0.99) & (ladder[1:] <= hi * (1.0 + 1e-9))]]
-        var, bias2, ends = _ladder_errors(windows, k, ladder, noises, r)
+        # motion-limited input is walked only toward finer spacings, and may go below the grid
+        # (toward interpolation); the rung below the first one kept is its reference
+        lo_k = lo * (0.5 if limited else 1.0)
+        ok = (ladder >= lo_k * 0.99) & (ladder <= hi * (1.0 + 1e-9))
+        first = max(int(np.argmax(ok)) - 1, 0)
+        ladder = np.r_[ladder[first], ladder[first + 1:][ok[first + 1:]]]
+        if dt_fixed is None:
+            ladder, var, bias2, ends = _walk_ladder(windows, k, ladder, noises, r, lo_k,
+                                                     ladder[-1] if limited else hi)
+        else:
+            var, bias2, ends = _ladder_errors(windows, k, ladder, noises, r)
         pred = np.sqrt(var + bias2)
         for j, dt in enumerate(ladder[1:]):
             rows.append({"order": k, "knot_spacing_s": float(dt), "predicted_rms": float(pred[j]),
