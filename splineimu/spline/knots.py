@@ -26,11 +26,12 @@ Method
    one, per order): signal and surrogate are fitted together; the noise part is the surrogate
    fit's derivative, the bias part the change of the signal fit's derivative from the rung
    below less the surrogate's change. While the smallest error sits at an end of the ladder
-   and the error falls over the two rungs before it, the ladder is walked on past that end
-   (hand-held mocap: the accelerometer's optimum is 2-3x the value-optimal spacing, beyond the
-   +-2 rungs). The (order, spacing) with the smallest predicted error wins, and that prediction
-   is reported (``predicted_gyro_rms_rad_s``, ``predicted_accel_rms_m_s2``); the same profile
-   over the first and last ``k`` spacings gives the error at the ends.
+   and the error falls over the two rungs before it, the ladder is walked on past that end,
+   toward coarser spacings up to :data:`WALK_MAX_S` (hand-held mocap: the accelerometer's
+   optimum is 2-3x the value-optimal spacing, beyond the +-2 rungs). The (order, spacing)
+   with the smallest predicted error wins, and that prediction is reported
+   (``predicted_gyro_rms_rad_s``, ``predicted_accel_rms_m_s2``); the same profile over the
+   first and last ``k`` spacings gives the error at the ends.
 4. **Low-rate or re-estimated input** (the power of the second differences falls toward the
    Nyquist frequency: the top of the band holds motion, not noise, :func:`motion_limited`) is
    searched at finer spacings, down to below the pose spacing, with a tenth of the surrogate;
@@ -91,6 +92,10 @@ _LADDER = 1.25
 _END_FRACTION = 0.05
 #: Most rungs the ladder is walked on past either end while its smallest error sits there.
 _WALK_RUNGS = 8
+#: The walk toward coarser spacings stops here: control points at least 20 per second keep
+#: motion up to 10 Hz, the band the synthesized IMU must reproduce (the walk trusts a bias
+#: estimate that lags the true bias once the spacing cuts into the motion).
+WALK_MAX_S = 0.05
 #: The residual autocorrelation below which noise counts as uncorrelated.
 _ACF_LEVEL = 0.1
 
@@ -419,8 +424,8 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf):
         first = max(int(np.argmax(ok)) - 1, 0)
         ladder = np.r_[ladder[first], ladder[first + 1:][ok[first + 1:]]]
         if dt_fixed is None:
-            ladder, var, bias2, ends = _walk_ladder(windows, k, ladder, noises, r, lo_k,
-                                                     ladder[-1] if limited else hi)
+            top = ladder[-1] if limited else max(ladder[-1], min(hi, WALK_MAX_S))
+            ladder, var, bias2, ends = _walk_ladder(windows, k, ladder, noises, r, lo_k, top)
         else:
             var, bias2, ends = _ladder_errors(windows, k, ladder, noises, r)
         pred = np.sqrt(var + bias2)
