@@ -12,11 +12,14 @@ real IMU's.
 
     PYTHONPATH=$PWD python benchmarks/real_pairs.py [names...]   # writes results/real_pairs.md
 
+Held-out BROAD trials (broad02 ... broad36) are read from the folders in $BROAD_DATA.
+
 Data: ../shared/data (BROAD: Laidig et al., Data 6(7):72, 2021, CC BY 4.0; EuRoC: ETH ASL).
 """
 
 from __future__ import annotations
 
+import os
 import sys
 import time
 from dataclasses import dataclass, field
@@ -44,7 +47,8 @@ class Pair:
 def load_broad(trial: str) -> Pair:
     import h5py
 
-    path = next((DATA / "broad").glob(f"{trial}_*.hdf5"))
+    folders = [DATA / "broad"] + [Path(d) for d in os.environ.get("BROAD_DATA", "").split(os.pathsep) if d]
+    path = next(p for d in folders for p in sorted(d.glob(f"{trial}_*.hdf5")))
     with h5py.File(path, "r") as f:
         rate = float(f.attrs["sampling_rate"])
         gyr, acc = np.asarray(f["imu_gyr"]), np.asarray(f["imu_acc"])
@@ -75,6 +79,10 @@ PAIRS = {
     "broad07": lambda: load_broad("07"),
     "broad09": lambda: load_broad("09"),
     "broad16": lambda: load_broad("16"),
+    # held out: the other BROAD trials with mocap (data_hdf5 of github.com/dlaidig/broad), read
+    # from the folders in $BROAD_DATA (os.pathsep-separated) when not in ../shared/data/broad
+    **{f"broad{n}": (lambda n=n: load_broad(n)) for n in
+       ("02", "03", "05", "10", "11", "12", "14", "15", "18", "30", "31", "32", "33", "34", "35", "36")},
     "euroc200": lambda: load_euroc("groundtruth.csv", "EuRoC V1_02 200 Hz"),
     "euroc20": lambda: load_euroc("groundtruth_vicon2gt_20hz.csv", "EuRoC V1_02 20 Hz vicon2gt"),
 }

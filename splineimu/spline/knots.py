@@ -25,13 +25,17 @@ Method
 3. **The derivative's error on a ladder** of spacings (steps of 1.25x around the value-optimal
    one, per order): signal and surrogate are fitted together; the noise part is the surrogate
    fit's derivative, the bias part the change of the signal fit's derivative from the rung
-   below less the surrogate's change. The (order, spacing) with the smallest predicted error
-   wins, and that prediction is reported (``predicted_gyro_rms_rad_s``,
-   ``predicted_accel_rms_m_s2``); the same profile over the first and last ``k`` spacings gives
-   the error at the ends.
+   below less the surrogate's change. While the smallest error sits at an end of the ladder
+   and the error falls over the two rungs before it, the ladder is walked on past that end,
+   toward coarser spacings up to :data:`WALK_MAX_S` (hand-held mocap: the accelerometer's
+   optimum is 2-3x the value-optimal spacing, beyond the +-2 rungs). The (order, spacing)
+   with the smallest predicted error wins, and that prediction is reported
+   (``predicted_gyro_rms_rad_s``, ``predicted_accel_rms_m_s2``); the same profile over the
+   first and last ``k`` spacings gives the error at the ends.
 4. **Low-rate or re-estimated input** (the power of the second differences falls toward the
    Nyquist frequency: the top of the band holds motion, not noise, :func:`motion_limited`) is
-   searched at finer spacings, down to below the pose spacing, with a tenth of the surrogate.
+   searched at finer spacings, down to below the pose spacing, with a tenth of the surrogate;
+   its ladder is walked only toward finer spacings, down to half the grid's floor.
 5. The rotation spacing never exceeds the time in which the input turns by 60 degrees
    (:func:`max_rotation_spacing`): control rotations further apart cannot be told from the
    opposite turn.
@@ -54,10 +58,13 @@ a grid step.
 Where it fails: noise correlated over longer than the motion's own time scale is motion to
 any method that sees only the poses (it is kept); noise whose level changes along the
 recording (tracking worse during fast motion) is estimated as its average, so the fast parts
-get too little smoothing (BROAD 09: the synthesized gyro holds more above 15 Hz than the real
-IMU); a trajectory whose character changes (rest, then fast motion) gets one spacing per
-quantity for the whole of it; smooth input sampled so sparsely that its top octave holds
-neither noise nor motion is taken as noise-limited.
+get too little smoothing; noise whose spectrum rises below the value-optimal cut-off is
+continued flat and so underestimated there, and the ladder reads the noise a coarser rung
+removes as that rung's bias (BROAD 09 orientation: 20-40 Hz holds ~10x the surrogate's power,
+the predicted gyro error is flat from 11 to 28 ms and 14 ms is kept, where the synthesized gyro
+holds more above 15 Hz than the real IMU); a trajectory whose character changes (rest, then
+fast motion) gets one spacing per quantity for the whole of it; smooth input sampled so
+sparsely that its top octave holds neither noise nor motion is taken as noise-limited.
 """
 
 from __future__ import annotations
@@ -90,6 +97,12 @@ MAX_CONTROL_TURN_RAD = np.pi / 3
 _LADDER = 1.25
 #: Fraction of each window's span at both ends left out of the score (one-sided data).
 _END_FRACTION = 0.05
+#: Most rungs the ladder is walked on past either end while its smallest error sits there.
+_WALK_RUNGS = 8
+#: The walk toward coarser spacings stops here: control points at least 20 per second keep
+#: motion up to 10 Hz, the band the synthesized IMU must reproduce (the walk trusts a bias
+#: estimate that lags the true bias once the spacing cuts into the motion).
+WALK_MAX_S = 0.05
 #: The residual autocorrelation below which noise counts as uncorrelated.
 _ACF_LEVEL = 0.1
 
@@ -372,6 +385,39 @@ def _ladder_errors(windows, k, ladder, noises, r):
     return var[1:], bias2[1:], ends[1:]
 
 
+def _walk_ladder(windows, k, ladder, noises, r, lo, hi):
+    """:func:`_ladder_errors` on ``ladder``, walked on two rungs at a time past whichever end
+    holds the smallest predicted error while the error falls toward it (at most
+    :data:`_WALK_RUNGS` rungs each way, within [lo, hi]): the derivative's optimum can lie
+    several rungs from the value-optimal spacing the ladder is centred on. Returns the ladder
+    and the errors of its rungs above the first."""
+    var, bias2, ends = _ladder_errors(windows, k, ladder, noises, r)
+    up = down = 0
+    while var.size >= 3:
+        e = var + bias2
+        j = int(np.argmin(e))
+        # only a trend is followed: the error falls over the two rungs next to that end (a
+        # single rung's scatter in the prediction is no reason to leave the ladder)
+        if j == var.size - 1 and e[-3] > e[-2] and up < _WALK_RUNGS:
+            more = ladder[-1] * _LADDER ** np.arange(3)
+            more = more[more <= hi * (1.0 + 1e-9)]
+        elif j == 0 and e[2] > e[1] and down < _WALK_RUNGS:
+            more = ladder[0] * _LADDER ** np.arange(-2, 1)
+            more = more[max(int(np.argmax(more >= lo * 0.99)) - 1, 0):] if more[-1] >= lo * 0.99 else more[:1]
+        else:
+            break
+        if more.size < 2:
+            break
+        v, b, en = _ladder_errors(windows, k, more, noises, r)
+        if j == var.size - 1:
+            up += v.size
+            ladder, var, bias2, ends = np.r_[ladder, more[1:]], np.r_[var, v], np.r_[bias2, b], ends + en
+        else:
+            down += v.size
+            ladder, var, bias2, ends = np.r_[more, ladder[1:]], np.r_[v, var], np.r_[b, bias2], en + ends
+    return ladder, var, bias2, ends
+
+
 def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf):
     """Order and spacing (at most ``dt_max``) for an ordinary B-spline fit of signal X (N, 3)
     whose r-th derivative matters; returns a dict (see :func:`choose_knot_spacing`)."""
@@ -414,8 +460,17 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf):
         dt_cv = min((v, dt) for (kk, dt), v in table.items() if kk == k)[1]
         steps = np.arange(-1, 1) if dt_fixed is not None else (np.arange(-4, 1) if limited else np.arange(-2, 3))
         ladder = dt_cv * _LADDER ** steps
-        ladder = np.r_[ladder[0], ladder[1:][(ladder[1:] >= lo * 0.99) & (ladder[1:] <= hi * (1.0 + 1e-9))]]
-        var, bias2, ends = _ladder_errors(windows, k, ladder, noises, r)
+        # motion-limited input is walked only toward finer spacings, and may go below the grid
+        # (toward interpolation); the rung below the first one kept is its reference
+        lo_k = lo * (0.5 if limited else 1.0)
+        ok = (ladder >= lo_k * 0.99) & (ladder <= hi * (1.0 + 1e-9))
+        first = max(int(np.argmax(ok)) - 1, 0)
+        ladder = np.r_[ladder[first], ladder[first + 1:][ok[first + 1:]]]
+        if dt_fixed is None:
+            top = ladder[-1] if limited else max(ladder[-1], min(hi, WALK_MAX_S))
+            ladder, var, bias2, ends = _walk_ladder(windows, k, ladder, noises, r, lo_k, top)
+        else:
+            var, bias2, ends = _ladder_errors(windows, k, ladder, noises, r)
         pred = np.sqrt(var + bias2)
         for j, dt in enumerate(ladder[1:]):
             rows.append({"order": k, "knot_spacing_s": float(dt), "predicted_rms": float(pred[j]),
