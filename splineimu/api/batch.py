@@ -251,7 +251,8 @@ def run_batch(scene_file, runs: int, out_dir, *, workers: int | None = None, sch
     scheduler : str, optional
         Address of an existing Dask scheduler (``tcp://host:port``) instead of a local cluster.
     resume : bool
-        Continue the batch in ``OUT``: run only the runs without a folder.
+        Continue the batch in ``OUT``: run only the runs without a complete folder (see the
+        module docstring for what is checked).
     force : bool
         Replace an existing ``OUT``.
     progress : bool

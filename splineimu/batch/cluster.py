@@ -1,10 +1,12 @@
 """Dask plumbing for batches: a local cluster or an existing scheduler, tasks, progress.
 
-A batch maps a picklable function over run indices on Dask workers. By default a
-:class:`distributed.LocalCluster` with ``workers`` processes of one thread each (numba kernels
-and BLAS then do not compete for cores); with ``scheduler="tcp://host:port"`` an existing
-cluster (``dask scheduler`` + ``dask worker``, dask-jobqueue on SLURM/PBS, Kubernetes) runs
-the same tasks. Tasks are retried on another worker when the one running them dies.
+A batch maps a picklable function over run indices on Dask workers, a few runs per task. By
+default a :class:`distributed.LocalCluster` with ``workers`` processes of one thread each (numba
+kernels, BLAS and the text formatting of :mod:`splineimu.io.tables` run in that thread, so a
+worker uses one core) and Dask's periodic housekeeping made rarer (:data:`QUIET_CONFIG`); with
+``scheduler="tcp://host:port"`` an existing cluster (``dask scheduler`` + ``dask worker``,
+dask-jobqueue on SLURM/PBS, Kubernetes) runs the same tasks with its own settings. Tasks are
+retried on another worker when the one running them dies.
 """
 
 from __future__ import annotations
@@ -83,16 +85,23 @@ def dask_client(workers: int | None = None, scheduler: str | None = None):
                 cluster.close()
 
 
-def chunk_size(n_runs: int, n_workers: int) -> int:
-    """Runs per task: at least four tasks per worker (so that the last ones balance), at most
-    :data:`MAX_CHUNK` runs each (a task's result and a retry stay small).
+def chunk_sizes(n_runs: int, n_workers: int) -> list[int]:
+    """Runs per task, in order: a quarter of each worker's share of the runs still to hand out,
+    at most :data:`MAX_CHUNK` (a task's result and a retry stay small), down to one run per task
+    at the end, so that the workers finish together (guided self-scheduling).
 
     Examples
     --------
-    >>> chunk_size(1000, 2), chunk_size(20, 2), chunk_size(3, 2)
-    (8, 3, 1)
+    >>> chunk_sizes(1000, 2)[:3], len(chunk_sizes(1000, 2)), chunk_sizes(1000, 2)[-8:]
+    ([8, 8, 8], 144, [1, 1, 1, 1, 1, 1, 1, 1])
+    >>> chunk_sizes(3, 2)
+    [1, 1, 1]
     """
-    return max(1, min(MAX_CHUNK, -(-n_runs // (4 * max(n_workers, 1)))))
+    sizes, left = [], int(n_runs)
+    while left > 0:
+        sizes.append(max(1, min(MAX_CHUNK, left // (4 * max(n_workers, 1)))))
+        left -= sizes[-1]
+    return sizes
 
 
 def run_chunk(fn, ks, *args) -> list:
@@ -124,9 +133,9 @@ def steady_time_per_run(ends, n_workers: int) -> float | None:
 def map_runs(client, fn, indices, *args, progress: bool = True, on_result=None, chunk: int | None = None):
     """Run ``fn(k, *args)`` for every ``k`` of ``indices`` on the cluster; results as they complete.
 
-    Runs go to the workers in tasks of ``chunk`` consecutive runs (default :func:`chunk_size`):
-    the scheduler, the client and the workers' event loops then handle a task per ``chunk`` runs,
-    not per run. ``args`` are scattered once (broadcast to every worker) so large objects such
+    Runs go to the workers in tasks of consecutive runs (``chunk`` runs each, default
+    :func:`chunk_sizes`): the scheduler, the client and the workers' event loops then handle a
+    task per several runs, not per run. ``args`` are scattered once (broadcast to every worker) so large objects such
     as a fitted spline travel once per worker, not once per run. ``on_result(result)`` is called
     for every run, task by task in the order of completion. ``fn`` should return a mapping with
     ``run`` and ``status`` (it gets ``t_end``); the runs of a task lost with its workers more
@@ -140,12 +149,13 @@ def map_runs(client, fn, indices, *args, progress: bool = True, on_result=None, 
 
     indices = list(indices)
     n_workers = len(client.nthreads())
-    chunk = chunk or chunk_size(len(indices), n_workers)
+    sizes = [chunk] * -(-len(indices) // chunk) if chunk else chunk_sizes(len(indices), n_workers)
     shared = [a if a is None else client.scatter(a, broadcast=True) for a in args]
     token = uuid.uuid4().hex[:12]  # batches sharing a scheduler must not share task keys
-    futures = {}
-    for i in range(0, len(indices), chunk):
-        ks = indices[i:i + chunk]
+    futures, i = {}, 0
+    for size in sizes:  # submitted in order: the scheduler hands them out first come, first served
+        ks = indices[i:i + size]
+        i += size
         fut = client.submit(run_chunk, fn, ks, *shared, key=f"splineimu-runs-{token}-{ks[0]}", pure=False,
                             retries=2)
         futures[fut] = ks
@@ -175,5 +185,5 @@ def map_runs(client, fn, indices, *args, progress: bool = True, on_result=None, 
     return results, steady_time_per_run(ends, n_workers)
 
 
-__all__ = ["dask_client", "map_runs", "chunk_size", "run_chunk", "steady_time_per_run", "default_workers",
+__all__ = ["dask_client", "map_runs", "chunk_sizes", "run_chunk", "steady_time_per_run", "default_workers",
            "CONNECT_TIMEOUT_S", "MAX_CHUNK", "QUIET_CONFIG"]
