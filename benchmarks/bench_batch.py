@@ -19,9 +19,12 @@ varied noise densities. Figures, all from this one script run:
   ``n1`` runs divided by ``n2 - n1`` (fixed costs per batch cancel), median of ``--repeat``.
   CPU time is what other people's jobs on a shared machine disturb least; wall-clock ratios
   are not. From it the 2-worker scaling a 2-core machine allows:
-  ``2 * worker / (worker + client + scheduler + nannies)`` (one worker runs alone on a core
-  while the rest runs on the other; two workers share both cores with the rest). The disk's
-  writeback is done by kernel threads and is not counted.
+  ``2 * worker_1 / (worker_2 + client_2 + scheduler_2 + nannies_2)`` (one worker runs alone on a
+  core while the rest runs on the other; two workers share both cores with the rest; a run's CPU
+  time with two workers, ``worker_2``, can exceed ``worker_1`` when they compete for caches and
+  memory). It assumes that one worker uses one core: true since the text formatting runs in the
+  worker's thread (before, a worker formatted in two more threads, and the projection is an upper
+  bound). The disk's writeback is done by kernel threads and is not counted.
 
 Writes the table to stdout and (with ``--write``) to benchmarks/results/batch.md.
 """
@@ -165,7 +168,7 @@ def _cpu_lines(acc, sizes, repeat) -> list[str]:
              "|---:|" + "---:|" * (len(roles) + 3)]
     for w, a in acc.items():
         other = a["client"] + a["scheduler"] + a["nannies"]
-        proj = 2 * a["workers"] / (a["workers"] + other) if w == 2 else float("nan")
+        proj = 2 * acc[1]["workers"] / (a["workers"] + other) if w == 2 and 1 in acc else float("nan")
         lines.append(f"| {w} | " + " | ".join(f"{1e3 * a[r]:.1f}" for r in roles)
                      + f" | {1e3 * a['wall']:.1f} | {1e3 * a['in_worker_wall']:.1f} | {proj:.2f} |")
         lines.append(f"| {w}, idle [ms/s] | " + " | ".join(f"{1e3 * a['idle'][r]:.1f}" for r in roles) + " | | | |")

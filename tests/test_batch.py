@@ -279,9 +279,10 @@ def test_chunks_balance_and_steady_state():
         assert sum(sizes) == n and sizes == sorted(sizes, reverse=True)
         assert sizes[-min(n, 4 * w):] == [1] * min(n, 4 * w)  # the workers end together
         assert len(sizes) <= n // MAX_CHUNK + 4 * w * MAX_CHUNK
-    # three workers: the steady state starts at the third end
-    assert steady_time_per_run([5.0, 0.0, 1.0, 1.5, 2.0, 3.0], 3) == pytest.approx((5.0 - 1.5) / 3)
-    assert steady_time_per_run([0.0, 1.0], 1) is None
+    # the steady state starts once the slowest worker to start has ended its first run (at 1.5 here)
+    ends = [("c", 5.0), ("a", 0.0), ("a", 1.0), ("b", 1.2), ("a", 1.4), ("c", 1.5), ("b", 2.0), ("a", 3.0)]
+    assert steady_time_per_run(ends) == pytest.approx((5.0 - 1.5) / 3)
+    assert steady_time_per_run([("a", 0.0), ("a", 1.0)]) is None and steady_time_per_run([]) is None
 
 
 # --- slow: extra processes ------------------------------------------------------------------------
@@ -346,7 +347,7 @@ def test_external_scheduler_gives_the_same_bytes_and_survives_a_dead_worker(batc
         with dask_client(scheduler=address) as client:
             results, _ = map_runs(client, die_once, range(6), str(tmp_path), progress=False, chunk=3)
         assert (tmp_path / "died").exists()
-        assert sorted(r["run"] for r in results if r["status"] == "ok") == list(range(6))
+        assert sorted(r["run"] for r in results if r["status"] == "ok") == list(range(6)), results
     finally:
         _kill(procs)
 

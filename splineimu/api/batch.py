@@ -23,6 +23,9 @@ calls :func:`os.sync` once at its end, then writes ``runs.csv``. What a crash ca
   folder that fails is run again. A run folder cut in the middle of a file, with every file
   non-empty, would go unnoticed; after a power loss, ``--force`` is the safe choice.
 
+With ``scheduler`` on other machines the sync is the client machine's; a shared file system's
+own guarantees apply to what the workers wrote.
+
 Examples
 --------
 >>> run_name(7)

@@ -72,10 +72,10 @@ def dask_client(workers: int | None = None, scheduler: str | None = None):
             if n < 1:
                 raise ConfigError(f"--workers must be at least 1, got {n}", option="--workers")
             env = {"OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OMP_NUM_THREADS": "1",
-                   "NUMBA_NUM_THREADS": "1", "SPLINEIMU_FORMAT_THREADS": "0"}
+                   "NUMBA_NUM_THREADS": "1"}
             os.environ.update({k: os.environ.get(k, v) for k, v in env.items()})
             cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
-                                   silence_logs=40)
+                                   silence_logs=40, env={"SPLINEIMU_FORMAT_THREADS": "0"})
             client = Client(cluster)
         try:
             yield client
@@ -105,29 +105,41 @@ def chunk_sizes(n_runs: int, n_workers: int) -> list[int]:
 
 
 def run_chunk(fn, ks, *args) -> list:
-    """The task: ``fn(k, *args)`` for each ``k`` of ``ks``, results with the wall-clock time
-    (``time.time()``) at which each run ended (``t_end``)."""
+    """The task: ``fn(k, *args)`` for each ``k`` of ``ks``; each result gets the wall-clock time
+    (``time.time()``) at which its run ended, ``t_end``, and the worker that ran it, ``worker``."""
+    import socket
+
+    me = f"{socket.gethostname()}:{os.getpid()}"
     out = []
     for k in ks:
         res = fn(k, *args)
-        res["t_end"] = time.time()
+        res["t_end"], res["worker"] = time.time(), me
         out.append(res)
     return out
 
 
-def steady_time_per_run(ends, n_workers: int) -> float | None:
+def steady_time_per_run(ends) -> float | None:
     """Wall time per run once every worker has completed its first run (which pays imports,
-    compilation or cache loading): from the ``n_workers``-th end to the last, divided by the
-    runs ended in between; None when too few runs.
+    compilation or cache loading): from the last of the workers' first ends to the last end,
+    divided by the runs ended in between; None when fewer than two.
+
+    Parameters
+    ----------
+    ends : iterable of (worker, t_end)
 
     Examples
     --------
-    >>> steady_time_per_run([0.0, 1.0, 2.0, 2.5, 3.0, 3.5], 2)
-    0.625
+    >>> steady_time_per_run([("a", 0.0), ("a", 1.0), ("b", 2.0), ("a", 2.5), ("b", 3.0), ("a", 3.5)])
+    0.5
     """
-    ends = sorted(ends)
-    first = min(max(n_workers, 1), len(ends)) - 1
-    return (ends[-1] - ends[first]) / (len(ends) - 1 - first) if len(ends) - first > 2 else None
+    first = {}
+    for w, t in ends:
+        first[w] = min(first.get(w, t), t)
+    if not first:
+        return None
+    start = max(first.values())
+    after = [t for _, t in ends if t > start]
+    return (max(after) - start) / len(after) if len(after) >= 2 else None
 
 
 def map_runs(client, fn, indices, *args, progress: bool = True, on_result=None, chunk: int | None = None):
@@ -138,7 +150,7 @@ def map_runs(client, fn, indices, *args, progress: bool = True, on_result=None, 
     task per several runs, not per run. ``args`` are scattered once (broadcast to every worker) so large objects such
     as a fitted spline travel once per worker, not once per run. ``on_result(result)`` is called
     for every run, task by task in the order of completion. ``fn`` should return a mapping with
-    ``run`` and ``status`` (it gets ``t_end``); the runs of a task lost with its workers more
+    ``run`` and ``status`` (it gets ``t_end`` and ``worker``); the runs of a task lost with its workers more
     often than its retries allow are reported as such mappings with status ``failed``.
 
     Returns the results and the steady-state time per run (:func:`steady_time_per_run`).
@@ -173,7 +185,7 @@ def map_runs(client, fn, indices, *args, progress: bool = True, on_result=None, 
                 res = [{"run": k, "status": "failed", "error": f"{type(exc).__name__}: {exc}"} for k in futures[fut]]
             for r in res:
                 if "t_end" in r:
-                    ends.append(r["t_end"])
+                    ends.append((r.get("worker"), r["t_end"]))
                 results.append(r)
                 if on_result is not None:
                     on_result(r)
@@ -182,7 +194,7 @@ def map_runs(client, fn, indices, *args, progress: bool = True, on_result=None, 
     finally:
         if bar is not None:
             bar.close()
-    return results, steady_time_per_run(ends, n_workers)
+    return results, steady_time_per_run(ends)
 
 
 __all__ = ["dask_client", "map_runs", "chunk_sizes", "run_chunk", "steady_time_per_run", "default_workers",
