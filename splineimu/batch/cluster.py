@@ -142,13 +142,21 @@ def steady_time_per_run(ends) -> float | None:
     return (max(after) - start) / len(after) if len(after) >= 2 else None
 
 
+def _value(x):
+    """The task that holds a batch's shared arguments."""
+    return x
+
+
 def map_runs(client, fn, indices, *args, progress: bool = True, on_result=None, chunk: int | None = None):
     """Run ``fn(k, *args)`` for every ``k`` of ``indices`` on the cluster; results as they complete.
 
     Runs go to the workers in tasks of consecutive runs (``chunk`` runs each, default
     :func:`chunk_sizes`): the scheduler, the client and the workers' event loops then handle a
-    task per several runs, not per run. ``args`` are scattered once (broadcast to every worker) so large objects such
-    as a fitted spline travel once per worker, not once per run. ``on_result(result)`` is called
+    task per several runs, not per run. ``args`` go to the cluster once, as the result of a task
+    that returns them: large objects such as a fitted spline travel once per worker, not once
+    per run, and if the worker holding the last copy dies the task makes it again (a scattered
+    copy would be lost with it, and every run waiting for it cancelled: Dask's memory manager
+    keeps one copy of data no task is reading at the moment). ``on_result(result)`` is called
     for every run, task by task in the order of completion. ``fn`` should return a mapping with
     ``run`` and ``status`` (it gets ``t_end`` and ``worker``); the runs of a task lost with its workers more
     often than its retries allow are reported as such mappings with status ``failed``.
@@ -162,8 +170,9 @@ def map_runs(client, fn, indices, *args, progress: bool = True, on_result=None, 
     indices = list(indices)
     n_workers = len(client.nthreads())
     sizes = [chunk] * -(-len(indices) // chunk) if chunk else chunk_sizes(len(indices), n_workers)
-    shared = [a if a is None else client.scatter(a, broadcast=True) for a in args]
     token = uuid.uuid4().hex[:12]  # batches sharing a scheduler must not share task keys
+    shared = [a if a is None else client.submit(_value, a, key=f"splineimu-args-{token}-{i}", pure=False)
+              for i, a in enumerate(args)]
     futures, i = {}, 0
     for size in sizes:  # submitted in order: the scheduler hands them out first come, first served
         ks = indices[i:i + size]
