@@ -231,6 +231,60 @@ def test_pose_file_batch_fits_once_and_matches_run_index(tmp_path, one_worker):
         assert mine[name] == theirs[name], name
 
 
+def test_batch_runs_do_not_fsync_each_file_but_the_batch_syncs_once(batch, scene, tmp_path, monkeypatch, one_worker):
+    import splineimu.api.batch as api_batch
+    from splineimu.api.scenefile import SceneFile
+
+    calls = []
+    real_fsync = os.fsync
+    monkeypatch.setattr(os, "fsync", lambda fd: (calls.append(fd), real_fsync(fd))[1])
+    api_batch.run_one(3, SceneFile.read(scene), str(tmp_path / "runs"))
+    assert calls == []  # a run of a batch: no fsync (the batch syncs at its end)
+    _same_runs(batch[0], tmp_path, [3])
+    assert main(["run", str(scene), "--run-index", "3", "-o", str(tmp_path / "single")]) == 0
+    assert len(calls) >= 4  # a single run still flushes its files one by one
+    syncs = []
+    monkeypatch.setattr(api_batch, "_sync", lambda: syncs.append(1))
+    assert run_batch(scene, 2, tmp_path / "mc", scheduler=one_worker, progress=False).ok
+    assert syncs == [1]
+
+
+def test_resume_reruns_a_folder_cut_by_a_power_loss(batch, scene, tmp_path, one_worker):
+    out, _ = batch
+    mine = tmp_path / "mc"
+    shutil.copytree(out, mine)
+    runs = 8
+    # what a power loss can leave of runs not yet on the disk: empty files in a renamed folder
+    (mine / "runs" / "00005" / "mav0" / "imu0" / "data.csv").write_bytes(b"")
+    (mine / "runs" / "00006" / "report.json").write_bytes(b"")
+    rows = _rows(mine)
+    rows[5]["status"] = rows[6]["status"] = "missing"  # runs.csv is written after the sync
+    with open(mine / "runs.csv", "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0]), lineterminator="\n")
+        w.writeheader()
+        w.writerows(rows)
+    stamp = (mine / "runs" / "00004" / "report.json").stat().st_mtime_ns
+    result = run_batch(scene, runs, mine, scheduler=one_worker, resume=True, progress=False)
+    assert result.ok and result.ran == 2 and result.skipped == runs - 2
+    _same_runs(out, mine, range(runs))
+    assert (mine / "runs" / "00004" / "report.json").stat().st_mtime_ns == stamp
+
+
+def test_chunks_balance_and_steady_state():
+    from splineimu.batch.cluster import MAX_CHUNK, chunk_sizes, steady_time_per_run
+
+    assert chunk_sizes(1, 8) == [1] and max(chunk_sizes(10**5, 2)) == MAX_CHUNK
+    for n, w in [(24, 2), (30, 1), (50, 2), (7, 3), (10**4, 4)]:
+        sizes = chunk_sizes(n, w)
+        assert sum(sizes) == n and sizes == sorted(sizes, reverse=True)
+        assert sizes[-min(n, 4 * w):] == [1] * min(n, 4 * w)  # the workers end together
+        assert len(sizes) <= n // MAX_CHUNK + 4 * w * MAX_CHUNK
+    # the steady state starts once the slowest worker to start has ended its first run (at 1.5 here)
+    ends = [("c", 5.0), ("a", 0.0), ("a", 1.0), ("b", 1.2), ("a", 1.4), ("c", 1.5), ("b", 2.0), ("a", 3.0)]
+    assert steady_time_per_run(ends) == pytest.approx((5.0 - 1.5) / 3)
+    assert steady_time_per_run([("a", 0.0), ("a", 1.0)]) is None and steady_time_per_run([]) is None
+
+
 # --- slow: extra processes ------------------------------------------------------------------------
 
 def _env():
@@ -291,9 +345,9 @@ def test_external_scheduler_gives_the_same_bytes_and_survives_a_dead_worker(batc
         from splineimu.batch.cluster import dask_client, map_runs
 
         with dask_client(scheduler=address) as client:
-            results, _ = map_runs(client, die_once, range(6), str(tmp_path), progress=False)
+            results, _ = map_runs(client, die_once, range(6), str(tmp_path), progress=False, chunk=3)
         assert (tmp_path / "died").exists()
-        assert sorted(r["run"] for r in results if r["status"] == "ok") == list(range(6))
+        assert sorted(r["run"] for r in results if r["status"] == "ok") == list(range(6)), results
     finally:
         _kill(procs)
 

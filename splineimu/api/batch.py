@@ -9,6 +9,23 @@ same bytes ``splineimu run SCENE.yaml --run-index k`` writes. Each run folder ap
 only the missing ones. ``OUT/runs.csv`` lists every run: index, seed, the drawn values at full
 precision (``repr``), status and error.
 
+Durability is per batch, not per run: workers do not flush each file to the disk (an ``fsync``
+waits for the disk, a few ms per file, and the waits of all workers queue on it); the batch
+calls :func:`os.sync` once at its end, then writes ``runs.csv``. What a crash can lose:
+
+- a killed batch (SIGKILL, Ctrl-C, a dead worker or client): nothing that was complete. The
+  operating system still writes the page cache to the disk, so every run folder present is
+  complete; ``resume`` runs the others.
+- a power loss or an operating-system crash: also the runs finished in the last seconds (the
+  kernel writes dirty pages back within about 30 s), whose folders may hold empty or cut files.
+  ``resume`` trusts the runs that the last ``runs.csv`` lists as ``ok`` (it was written after
+  the sync) and checks the other folders (every file non-empty, ``report.json`` readable): a
+  folder that fails is run again. A run folder cut in the middle of a file, with every file
+  non-empty, would go unnoticed; after a power loss, ``--force`` is the safe choice.
+
+With ``scheduler`` on other machines the sync is the client machine's; a shared file system's
+own guarantees apply to what the workers wrote.
+
 Examples
 --------
 >>> run_name(7)
@@ -103,12 +120,14 @@ class BatchResult:
 
 
 def run_one(k: int, scene, runs_dir: str, prepared=None) -> dict:
-    """Run ``k`` of a batch on a worker: build its job, synthesize, write ``runs_dir/NNNNN``.
+    """Run ``k`` of a batch on a worker: build its job, synthesize, write ``runs_dir/NNNNN``
+    (without flushing the files to the disk: :func:`run_batch` syncs at its end).
 
     Returns ``{"run", "status", "error", "time_s"}``; errors of the run are returned, not raised
     (a worker that dies is handled by Dask, which runs the task again elsewhere).
     """
     from ..errors import OutputExistsError, SplineImuError
+    from ..io.files import deferred_sync
     from .synthesis import run_job
 
     t0 = time.perf_counter()
@@ -116,7 +135,8 @@ def run_one(k: int, scene, runs_dir: str, prepared=None) -> dict:
     row = {"run": int(k), "status": "ok", "error": ""}
     if not out.is_dir():
         try:
-            run_job(scene.job(k, out_dir=out), prepared=prepared)
+            with deferred_sync():  # the batch syncs once at its end
+                run_job(scene.job(k, out_dir=out), prepared=prepared)
         except OutputExistsError:
             if not out.is_dir():  # pragma: no cover - a file of that name
                 raise
@@ -172,6 +192,41 @@ def _prepare_out(out: Path, manifest: dict, resume: bool, force: bool):
                           "use --force to replace it or another OUT", option="--resume")
 
 
+def _durable_ok(out: Path) -> set:
+    """The runs the last ``runs.csv`` lists as ``ok`` (it is written after :func:`os.sync`)."""
+    try:
+        with open(out / "runs.csv", newline="") as f:
+            return {int(r["run"]) for r in csv.DictReader(f) if r.get("status") == "ok"}
+    except (OSError, ValueError, KeyError, csv.Error):
+        return set()
+
+
+def run_folder_looks_complete(folder: Path) -> bool:
+    """Whether a run folder survived a power loss: every file non-empty, ``report.json`` readable.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> d = pathlib.Path(tempfile.mkdtemp())
+    >>> _ = (d / "report.json").write_text("{}"); _ = (d / "data.csv").write_text("")
+    >>> run_folder_looks_complete(d)
+    False
+    """
+    try:
+        json.loads((folder / "report.json").read_text())
+        return all(p.stat().st_size > 0 for p in folder.rglob("*") if p.is_file())
+    except (OSError, ValueError):
+        return False
+
+
+def _sync():
+    """Flush everything written to the disk (the batch's durability point; see the module docstring)."""
+    import os
+
+    if hasattr(os, "sync"):
+        os.sync()
+
+
 def _clear_temporaries(runs_dir: Path):
     """Remove the temporary folders of runs that were killed while writing."""
     import shutil
@@ -199,7 +254,8 @@ def run_batch(scene_file, runs: int, out_dir, *, workers: int | None = None, sch
     scheduler : str, optional
         Address of an existing Dask scheduler (``tcp://host:port``) instead of a local cluster.
     resume : bool
-        Continue the batch in ``OUT``: run only the runs without a folder.
+        Continue the batch in ``OUT``: run only the runs without a complete folder (see the
+        module docstring for what is checked).
     force : bool
         Replace an existing ``OUT``.
     progress : bool
@@ -251,9 +307,13 @@ def run_batch(scene_file, runs: int, out_dir, *, workers: int | None = None, sch
         runs_dir.mkdir(parents=True, exist_ok=True)
         atomic_write_text(out / MANIFEST, json.dumps(manifest, indent=1) + "\n")
         _clear_temporaries(runs_dir)
+        durable = _durable_ok(out) if resume else set()
         todo = []
         for k in range(runs):
-            if (runs_dir / run_name(k)).is_dir():
+            folder = runs_dir / run_name(k)
+            if folder.is_dir() and not (k in durable or run_folder_looks_complete(folder)):
+                shutil.rmtree(folder)  # cut by a power loss: run it again
+            if folder.is_dir():
                 rows[k]["status"] = "ok"
                 result.skipped += 1
             else:
@@ -270,6 +330,7 @@ def run_batch(scene_file, runs: int, out_dir, *, workers: int | None = None, sch
                                  on_result=done)
         finally:
             _clear_temporaries(runs_dir)
+            _sync()
             write_runs_csv(out / "runs.csv", rows, keys)
     result.ran = sum(1 for k in todo if rows[k]["status"] == "ok")
     result.failed = sum(1 for r in rows if r["status"] == "failed")
@@ -279,4 +340,5 @@ def run_batch(scene_file, runs: int, out_dir, *, workers: int | None = None, sch
     return result
 
 
-__all__ = ["run_batch", "run_one", "BatchResult", "write_runs_csv", "run_name", "RUN_DIGITS"]
+__all__ = ["run_batch", "run_one", "BatchResult", "write_runs_csv", "run_folder_looks_complete", "run_name",
+           "RUN_DIGITS"]

@@ -19,7 +19,9 @@ seed from the file's `seed` and k alone, so any run can be repeated on its own w
 Output: OUT/runs/NNNNN/ (00000, 00001, ...: each what `splineimu run` writes), OUT/runs.csv
 (run, seed, the drawn values at full precision, status, error) and OUT/batch.json. Each run
 folder appears complete or not at all; --resume runs the missing ones. The exit code is 1 if a
-run failed (its reason is in runs.csv).
+run failed (its reason is in runs.csv). The files reach the disk at the end of the batch (one
+sync, not one per file): after a power loss during a batch, --resume re-checks the run folders
+that runs.csv does not list as ok.
 
 By default a local Dask cluster of --workers processes runs the batch. With --scheduler the
 runs go to an existing cluster (`dask scheduler` + `dask worker`, dask-jobqueue, Kubernetes):

@@ -20,7 +20,7 @@ import numpy as np
 
 from .._kernels import textfmt as _k
 from ..errors import InputError
-from .files import atomic_write_bytes
+from .files import atomic_write_bytes, sync_to_disk
 
 __all__ = ["TableWriter", "format_table", "format_table_chunks", "write_table", "CHUNK_ROWS", "MAX_AHEAD"]
 
@@ -30,7 +30,8 @@ class TableWriter:
 
     Meant for files inside an :class:`OutputFolder`'s temporary folder (the folder makes
     the whole output atomic); the file is created exclusively, so nothing existing is
-    overwritten, and it is flushed and fsync'ed on :meth:`close`.
+    overwritten, and it is flushed and fsync'ed on :meth:`close` (unless
+    :func:`~splineimu.io.files.deferred_sync`).
 
     Parameters
     ----------
@@ -82,7 +83,7 @@ class TableWriter:
             for piece in self._fmt.ready(True):
                 self._f.write(piece)
             self._f.flush()
-            os.fsync(self._f.fileno())
+            sync_to_disk(self._f.fileno())
         finally:
             self._fmt.cancel()
             self._f.close()
@@ -185,15 +186,22 @@ if hasattr(os, "register_at_fork"):
     os.register_at_fork(after_in_child=_forget_pool)
 
 
+#: environment variable: number of formatting threads; 0 formats in the calling thread (as a
+#: batch worker does: one core per worker). Default: the number of CPUs, at most 4.
+THREADS_ENV = "SPLINEIMU_FORMAT_THREADS"
+
+
 def _pool():
-    """The formatting threads (the number of CPUs, at most 4), started on first use."""
+    """The formatting threads, started on first use (None: format in the calling thread)."""
     global _POOL
     with _POOL_LOCK:
         if _POOL is None:
             from concurrent.futures import ThreadPoolExecutor
 
-            _POOL = ThreadPoolExecutor(max_workers=min(os.cpu_count() or 1, 4),
-                                       thread_name_prefix="splineimu-format")
+            n = int(os.environ.get(THREADS_ENV) or min(os.cpu_count() or 1, 4))
+            if n < 1:
+                return None
+            _POOL = ThreadPoolExecutor(max_workers=n, thread_name_prefix="splineimu-format")
         return _POOL
 
 
@@ -227,7 +235,14 @@ class _Formatter:
         pool = _pool()
         for c0 in range(0, t.shape[0], CHUNK_ROWS):
             c1 = min(c0 + CHUNK_ROWS, t.shape[0])
-            self.pending.append(pool.submit(_format_piece, t[c0:c1], v[c0:c1], sep_b, mode))
+            if pool is None:
+                from concurrent.futures import Future
+
+                f = Future()
+                f.set_result(_format_piece(t[c0:c1], v[c0:c1], sep_b, mode))
+            else:
+                f = pool.submit(_format_piece, t[c0:c1], v[c0:c1], sep_b, mode)
+            self.pending.append(f)
 
     def ready(self, block: bool):
         """Finished pieces from the front: all of them when ``block``, else those done (and
