@@ -318,3 +318,18 @@ def test_dead_reckoning_of_mean_samples_is_as_accurate_as_of_point_samples(tmp_p
     assert err["mean"] <= 1.5 * err["point"]
     assert ignored > 10 * err["point"]  # what reading mean samples as points costs
     assert pre["mean"] <= 1.5 * pre["point"]
+
+
+def test_per_axis_densities_reach_openvins_as_one_number(tmp_path):
+    """OpenVINS reads each noise key as one double (cv::FileStorage): a per-axis density is
+    written as its largest axis, the axes in a comment; imu.yaml keeps the three values."""
+    run_job(_scene_job(tmp_path / "o", model={"gyroscope_noise_density": [1e-4, 2e-4, 3e-4],
+                                              "accelerometer_noise_density": 2e-3}))
+    fs = _fs(tmp_path / "o" / "kalibr_imu_chain.yaml")  # the nodes live as long as the storage
+    imu0 = fs.getNode("imu0")
+    assert imu0.getNode("gyroscope_noise_density").isReal()
+    assert imu0.getNode("gyroscope_noise_density").real() == 3e-4
+    assert imu0.getNode("accelerometer_noise_density").real() == 2e-3
+    assert "per axis (x, y, z): 0.0001, 0.0002, 0.0003" in (tmp_path / "o" / "kalibr_imu_chain.yaml").read_text()
+    full = yaml.safe_load((tmp_path / "o" / "imu.yaml").read_text())
+    assert full["gyroscope_noise_density"] == [1e-4, 2e-4, 3e-4]

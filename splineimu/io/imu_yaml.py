@@ -97,8 +97,9 @@ def kalibr_imu_chain_text(config, *, update_rate: float, rostopic: str = "/imu0"
     :func:`splineimu.imu.openvins.to_openvins` (identity / zero when the model has no scale,
     misalignment or g-sensitivity). :meth:`ImuConfig.from_yaml` reads it back to the same
     sensor model (its noise, scale, misalignment and g-sensitivity; the other components are
-    in ``imu.yaml``). A density that differs between axes is written as a list ``[x, y, z]``,
-    which OpenVINS (one number per key) does not read.
+    in ``imu.yaml``). OpenVINS reads one number per noise key: a density that differs between
+    axes is written as its largest axis (the filter then never trusts the sensor more than it
+    deserves), with the per-axis values in a comment; ``imu.yaml`` keeps them.
 
     Parameters
     ----------
@@ -131,6 +132,11 @@ def kalibr_imu_chain_text(config, *, update_rate: float, rostopic: str = "/imu0"
     for key in ("accelerometer_noise_density", "accelerometer_random_walk",
                 "gyroscope_noise_density", "gyroscope_random_walk"):
         value = compact(getattr(config, key)) if config is not None else 0.0
+        if isinstance(value, list):
+            # a comment inside the mapping upsets OpenCV's reader: it goes with the header
+            lines.insert(1, f"# {key} per axis (x, y, z): {', '.join(float_text(v) for v in value)}; "
+                            "OpenVINS reads one number: the largest is written")
+            value = max(value)
         lines.append(f"  {key}: {_number(value)}")
     ov = to_openvins(config)
     lines += [f"  rostopic: {rostopic}", f"  time_offset: {float_text(time_offset)}",
