@@ -46,7 +46,9 @@ class TimingModel:
     clock_drift_ppm : float
         The IMU clock runs fast by this many parts per million (negative: slow); |drift| < 1e5.
     stamp_noise_s : float
-        Standard deviation of white noise on the written stamps (>= 0).
+        Standard deviation of white noise on the written stamps (>= 0). A realization that puts
+        a stamp at or before the previous one is refused (ConfigError): keep it below a tenth of
+        the sample period.
     drop_probability : float
         Probability that a sample is lost, in [0, 1).
     drop_burst_s : float
@@ -150,6 +152,16 @@ class TimingModel:
         noise_gen, loss_gen = _child_generators(rng, 2)
         if self.stamp_noise_s > 0:
             stamp_ns = stamp_ns + np.rint(noise_gen.normal(0.0, self.stamp_noise_s * 1e9, grid.size)).astype(np.int64)
+            back = np.flatnonzero(np.diff(stamp_ns) <= 0)
+            if back.size:
+                from ..errors import ConfigError
+
+                period = 1.0 / float(rate_hz)
+                raise ConfigError(
+                    f"`stamp_noise_s` {self.stamp_noise_s:g} s at {float(rate_hz):g} Hz (period {period:g} s) puts "
+                    f"{back.size} of {grid.size - 1} stamps at or before the previous one (first at sample "
+                    f"{int(back[0]) + 1}); IMU stamps must increase: use at most a tenth of the period "
+                    f"({period / 10:g} s)", option="stamp_noise_s")
         keep = np.ones(grid.size, dtype=bool)
         if self.drop_probability > 0:
             keep = ~_losses(grid.size, self.drop_probability, self.drop_burst_s * float(rate_hz), loss_gen)

@@ -97,9 +97,10 @@ def kalibr_imu_chain_text(config, *, update_rate: float, rostopic: str = "/imu0"
     :func:`splineimu.imu.openvins.to_openvins` (identity / zero when the model has no scale,
     misalignment or g-sensitivity). :meth:`ImuConfig.from_yaml` reads it back to the same
     sensor model (its noise, per-axis densities as their largest axis, scale, misalignment and
-    g-sensitivity; the other components are in ``imu.yaml``). OpenVINS reads one number per noise key: a density that differs between
-    axes is written as its largest axis (the filter then never trusts the sensor more than it
-    deserves), with the per-axis values in a comment; ``imu.yaml`` keeps them.
+    g-sensitivity; the other components are in ``imu.yaml``). OpenVINS reads one number per
+    noise key: a density that differs between axes is written as its largest axis (the filter
+    then never trusts the sensor more than it deserves), with the per-axis values in a comment;
+    ``imu.yaml`` keeps them.
 
     Parameters
     ----------
