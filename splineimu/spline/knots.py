@@ -27,11 +27,12 @@ Method
    correlated noise) and continued for one octave below its cut-off with the log-log slope it
    has over the octave above (median over the windows, at most flat), flat beyond. BROAD
    orientation noise, measured against the real gyro, falls as f^-3.5 from 40 to 90 Hz and as
-   f^-1.7 from 20 to 40 Hz: the flat continuation missed up to 10x of it and the ladder read
+   f^-1.7 from 20 to 40 Hz: the flat continuation missed up to 7x of it and the ladder read
    it as the bias of coarser rungs (gyro spacings 8-23 ms where 19-32 ms is best; now 24-33
-   ms). The position keeps the flat continuation: the accelerometer's f^4 weighting keeps its
-   noise error at the cut-off, and on EuRoC's drone the coarser fit's residual is motion
-   (the position spacing went from 17 to 41 ms).
+   ms). The position keeps the flat continuation: on EuRoC's drone the coarser fit's residual
+   holds motion (position spacing 17 -> 41 ms, accel lp10 1.003x -> 1.06x the best), while on
+   BROAD 03 and 34 (slow motion, <0.1 mm noise) following it would fix the position (9.5 -> 36
+   ms, accel full 4.1-4.4x -> 0.93-1.02x the best); the poses alone do not tell them apart.
 3. **The derivative's error on a ladder** of spacings (steps of 1.25x around the value-optimal
    one, per order): signal and surrogate are fitted together; the noise part is the surrogate
    fit's derivative, the bias part the change of the signal fit's derivative from the rung
@@ -481,8 +482,8 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf):
     limited = dt_fixed is None and all(motion_limited(wd.X) for wd in windows)
     # the gyro's noise error is the noise spectrum times f^2: where that spectrum rises toward
     # low frequency faster than f^-2 the error sits below the cut-off, so its spectrum is read
-    # from the coarser value-optimal fit and followed below (not for motion-limited input,
-    # whose residual is motion)
+    # from the coarser value-optimal fit and followed below (not for the position, see the
+    # module notes, nor for motion-limited input, whose residual is motion)
     follow = r == 1 and not limited
     k_s, dt_s = (k0, dt0) if follow and dt0 > dt_cvb else (k_cv, dt_cvb)
     noises = _noise_surrogates(windows, k_s, dt_s, follow=follow)
