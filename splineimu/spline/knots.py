@@ -21,7 +21,18 @@ Method
    transfer, which is measured by passing a white draw through the same fit; dividing the
    residual's periodogram by it estimates the noise spectrum from about the fit's cut-off up,
    continued flat below (white, AR(1) and upsampled noise are flat there). A series with that
-   spectrum is drawn.
+   spectrum is drawn. For the rotation (the gyro's noise error is the spectrum times f^2, so a
+   spectrum rising toward low frequency faster than f^-2 puts it below the cut-off) the
+   spectrum is read from the coarser of the two cross-validated fits (0.1 s blocks see more of
+   correlated noise) and continued for one octave below its cut-off with the log-log slope it
+   has over the octave above (median over the windows, at most flat), flat beyond. BROAD
+   orientation noise, measured against the real gyro, falls as f^-3.5 from 40 to 90 Hz and as
+   f^-1.7 from 20 to 40 Hz: the flat continuation missed up to 7x of it and the ladder read
+   it as the bias of coarser rungs (gyro spacings 8-23 ms where 19-32 ms is best; now 24-33
+   ms). The position keeps the flat continuation: on EuRoC's drone the coarser fit's residual
+   holds motion (position spacing 17 -> 41 ms, accel lp10 1.003x -> 1.06x the best), while on
+   BROAD 03 and 34 (slow motion, <0.1 mm noise) following it would fix the position (9.5 -> 36
+   ms, accel full 4.1-4.4x -> 0.93-1.02x the best); the poses alone do not tell them apart.
 3. **The derivative's error on a ladder** of spacings (steps of 1.25x around the value-optimal
    one, per order): signal and surrogate are fitted together; the noise part is the surrogate
    fit's derivative, the bias part the change of the signal fit's derivative from the rung
@@ -58,11 +69,11 @@ a grid step.
 Where it fails: noise correlated over longer than the motion's own time scale is motion to
 any method that sees only the poses (it is kept); noise whose level changes along the
 recording (tracking worse during fast motion) is estimated as its average, so the fast parts
-get too little smoothing; noise whose spectrum rises below the value-optimal cut-off is
-continued flat and so underestimated there, and the ladder reads the noise a coarser rung
-removes as that rung's bias (BROAD 09 orientation: 20-40 Hz holds ~10x the surrogate's power,
-the predicted gyro error is flat from 11 to 28 ms and 14 ms is kept, where the synthesized gyro
-holds more above 15 Hz than the real IMU); a trajectory whose character changes (rest, then
+get too little smoothing; noise whose spectrum rises below the cut-off of the coarser
+cross-validated fit by more than the octave's slope shows (or, for the position, at all) is
+underestimated there, and the ladder reads the noise a coarser rung removes as that rung's
+bias (BROAD 32 orientation: 29 ms against the best 32 ms, the synthesized gyro 6% above the
+real IMU's content above 15 Hz); a trajectory whose character changes (rest, then
 fast motion) gets one spacing per quantity for the whole of it; smooth input sampled so
 sparsely that its top octave holds neither noise nor motion is taken as noise-limited.
 """
@@ -313,17 +324,14 @@ def motion_limited(X):
     return bool(low > 3.0 * top and mid > 1.5 * top)
 
 
-def _noise_surrogate(wd, k, dt_cv, seed=7):
-    """A noise series (N, 3) with the spectrum of the pose noise, for propagation through fits.
+def _noise_spectrum(wd, k, dt_cv, rng):
+    """Smoothed periodogram (M, 3) of the pose noise from the fit at the value-optimal spacing,
+    valid from index ``first`` up (None: nowhere), and its log-log slope over the octave above.
 
-    The residual of the fit at the value-optimal spacing is the pose noise times the fit's
-    residual transfer ``(1 - H(f))^2`` (and motion the fit misses); that transfer is measured
-    by passing a white draw through the same fit. The residual's smoothed periodogram divided by
-    it estimates the noise spectrum where the transfer is at least 0.2 (from about the fit's
-    cut-off up), and is continued flat below (white, AR(1)-coloured and upsampled noise are
-    all flat there). A series with that spectrum and random phases is drawn.
-    """
-    rng = np.random.default_rng(seed)
+    The residual of that fit is the pose noise times the fit's residual transfer ``(1 -
+    H(f))^2`` (and motion the fit misses); that transfer is measured by passing a white draw
+    through the same fit, and the residual's periodogram divided by it where it is at least 0.2
+    (from about the fit's cut-off up)."""
     white = rng.normal(size=wd.X.shape)
     both = np.ascontiguousarray(np.hstack([wd.X, white]))
     res = both - wd.derivative(k, dt_cv, wd.zero, 1, 0, both)[0]
@@ -337,16 +345,38 @@ def _noise_surrogate(wd, k, dt_cv, seed=7):
         return np.column_stack([np.convolve(P[:, j], kernel, mode="same") for j in range(x.shape[1])])
 
     P = spectrum(res[:, :3])
-    gain = spectrum(res[:, 3:]) / np.maximum(spectrum(white), 1e-300)
-    gain = np.mean(gain, axis=1)
+    gain = np.mean(spectrum(res[:, 3:]) / np.maximum(spectrum(white), 1e-300), axis=1)
     ok = np.flatnonzero(gain >= 0.2)
-    if ok.size:
-        first = ok[0]
-        P[first:] /= np.maximum(gain[first:, None], 0.2)
-        P[:first] = P[first]
-    phase = np.exp(2j * np.pi * rng.random(P.shape))
-    phase[0] = 1.0
-    return np.fft.irfft(np.sqrt(P) * phase, n, axis=0)
+    if not ok.size:
+        return P, None, np.nan
+    first = ok[0]
+    P[first:] /= np.maximum(gain[first:, None], 0.2)
+    band = np.arange(max(first, 1), min(2 * first, P.shape[0] - 1) + 1)
+    slope = np.polyfit(np.log(band), np.log(P[band].sum(axis=1)), 1)[0] if band.size >= 4 else np.nan
+    return P, first, slope
+
+
+def _noise_surrogates(windows, k, dt_cv, seed=7, follow=True):
+    """Noise series (N, 3) per window with the spectrum of the pose noise, for propagation
+    through fits: :func:`_noise_spectrum` drawn with random phases, continued below its cut-off
+    flat or (``follow``) with the median over the windows of its slope over the octave above,
+    at most flat, for one octave (the spacings up to twice the fit's, where the ladder weighs
+    noise against bias) and flat beyond. White, AR(1) and upsampled noise are flat or nearly so
+    above the cut-off and stay flat; noise rolling off above its own corner (mocap filters)
+    keeps rising below it."""
+    rngs = [np.random.default_rng(seed) for _ in windows]
+    spectra = [_noise_spectrum(wd, k, dt_cv, rng) for wd, rng in zip(windows, rngs)]
+    slopes = [sl for _, first, sl in spectra if first is not None and np.isfinite(sl)]
+    slope = min(float(np.median(slopes)), 0.0) if slopes and follow else 0.0
+    out = []
+    for (P, first, _), rng, wd in zip(spectra, rngs, windows):
+        if first is not None:
+            f = np.maximum(np.arange(first), first / 2.0)
+            P[:first] = P[first] * (f / first)[:, None] ** slope
+        phase = np.exp(2j * np.pi * rng.random(P.shape))
+        phase[0] = 1.0
+        out.append(np.fft.irfft(np.sqrt(P) * phase, wd.X.shape[0], axis=0))
+    return out
 
 
 def _ladder_errors(windows, k, ladder, noises, r):
@@ -449,8 +479,14 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf):
     # 2. per order, the derivative's error on a ladder around the value-optimal spacing, with a
     # surrogate of the pose noise (spectrum from the residual) propagated through the same fits
     k_cv, dt_cvb = _best(table, orders)[:2]
-    noises = [_noise_surrogate(wd, k_cv, dt_cvb) for wd in windows]
     limited = dt_fixed is None and all(motion_limited(wd.X) for wd in windows)
+    # the gyro's noise error is the noise spectrum times f^2: where that spectrum rises toward
+    # low frequency faster than f^-2 the error sits below the cut-off, so its spectrum is read
+    # from the coarser value-optimal fit and followed below (not for the position, see the
+    # module notes, nor for motion-limited input, whose residual is motion)
+    follow = r == 1 and not limited
+    k_s, dt_s = (k0, dt0) if follow and dt0 > dt_cvb else (k_cv, dt_cvb)
+    noises = _noise_surrogates(windows, k_s, dt_s, follow=follow)
     if limited:
         # the residual is mostly motion the fit missed, not noise: look at finer spacings
         noises = [0.1 * nz for nz in noises]
