@@ -21,18 +21,18 @@ Method
    transfer, which is measured by passing a white draw through the same fit; dividing the
    residual's periodogram by it estimates the noise spectrum from about the fit's cut-off up,
    continued flat below (white, AR(1) and upsampled noise are flat there). A series with that
-   spectrum is drawn. For the rotation (the gyro's noise error is the spectrum times f^2, so a
-   spectrum rising toward low frequency faster than f^-2 puts it below the cut-off) the
-   spectrum is read from the coarser of the two cross-validated fits (0.1 s blocks see more of
-   correlated noise) and continued for one octave below its cut-off with the log-log slope it
-   has over the octave above (median over the windows, at most flat), flat beyond. BROAD
+   spectrum is drawn. The spectrum is read from the coarser of the two cross-validated fits
+   (0.1 s blocks see more of correlated noise) and continued for one octave below its cut-off
+   with the log-log slope it has over the octave above (median over the windows, at most
+   flat), flat beyond: the derivative's noise error is the spectrum times f^2 (gyro) or f^4
+   (accel), so a spectrum rising toward low frequency puts it below the cut-off. BROAD
    orientation noise, measured against the real gyro, falls as f^-3.5 from 40 to 90 Hz and as
-   f^-1.7 from 20 to 40 Hz: the flat continuation missed up to 7x of it and the ladder read
-   it as the bias of coarser rungs (gyro spacings 8-23 ms where 19-32 ms is best; now 24-33
-   ms). The position keeps the flat continuation: on EuRoC's drone the coarser fit's residual
-   holds motion (position spacing 17 -> 41 ms, accel lp10 1.003x -> 1.06x the best), while on
-   BROAD 03 and 34 (slow motion, <0.1 mm noise) following it would fix the position (9.5 -> 36
-   ms, accel full 4.1-4.4x -> 0.93-1.02x the best); the poses alone do not tell them apart.
+   f^-1.7 from 20 to 40 Hz: the flat continuation missed up to 7x of it and the ladder read it
+   as the bias of coarser rungs (gyro spacings 8-23 ms where 19-32 ms is best; now 24-38 ms);
+   BROAD 03 and 34 (slow motion, <0.1 mm noise) got 9.5 ms position spacings and 4.1-4.4x the
+   best fixed accel error (now 36 ms, 0.93-1.02x). White, AR(1) and upsampled noise are flat
+   above the cut-off and keep the flat continuation. Motion-limited input (step 4) keeps it
+   too: its residual is motion.
 3. **The derivative's error on a ladder** of spacings (steps of 1.25x around the value-optimal
    one, per order): signal and surrogate are fitted together; the noise part is the surrogate
    fit's derivative, the bias part the change of the signal fit's derivative from the rung
@@ -70,10 +70,12 @@ Where it fails: noise correlated over longer than the motion's own time scale is
 any method that sees only the poses (it is kept); noise whose level changes along the
 recording (tracking worse during fast motion) is estimated as its average, so the fast parts
 get too little smoothing; noise whose spectrum rises below the cut-off of the coarser
-cross-validated fit by more than the octave's slope shows (or, for the position, at all) is
-underestimated there, and the ladder reads the noise a coarser rung removes as that rung's
-bias (BROAD 32 orientation: 29 ms against the best 32 ms, the synthesized gyro 6% above the
-real IMU's content above 15 Hz); a trajectory whose character changes (rest, then
+cross-validated fit by more than the octave's slope shows is underestimated there, and the
+ladder reads the noise a coarser rung removes as that rung's bias (BROAD 32 orientation: 29
+ms against the best 32 ms, the synthesized gyro 6% above the real IMU's content above 15 Hz);
+a coarser fit's residual that holds motion is read as noise and smooths more than needed
+(EuRoC V1_02 200 Hz position 17 -> 41 ms, accel lp10 1.003x -> 1.06x the best; BROAD 11
+56 ms, accel lp10 1.035x scipy); a trajectory whose character changes (rest, then
 fast motion) gets one spacing per quantity for the whole of it; smooth input sampled so
 sparsely that its top octave holds neither noise nor motion is taken as noise-limited.
 """
@@ -480,11 +482,11 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf):
     # surrogate of the pose noise (spectrum from the residual) propagated through the same fits
     k_cv, dt_cvb = _best(table, orders)[:2]
     limited = dt_fixed is None and all(motion_limited(wd.X) for wd in windows)
-    # the gyro's noise error is the noise spectrum times f^2: where that spectrum rises toward
-    # low frequency faster than f^-2 the error sits below the cut-off, so its spectrum is read
-    # from the coarser value-optimal fit and followed below (not for the position, see the
-    # module notes, nor for motion-limited input, whose residual is motion)
-    follow = r == 1 and not limited
+    # the derivative's noise error is the noise spectrum times f^(2r): where that spectrum rises
+    # toward low frequency the error sits below the cut-off, so the spectrum is read from the
+    # coarser value-optimal fit and followed below (not for motion-limited input, whose
+    # residual is motion)
+    follow = not limited
     k_s, dt_s = (k0, dt0) if follow and dt0 > dt_cvb else (k_cv, dt_cvb)
     noises = _noise_surrogates(windows, k_s, dt_s, follow=follow)
     if limited:
