@@ -297,47 +297,6 @@ def fold_normal_equations(s_all, w_all, fold, X, M, nseg, H, rhs):
                 rhs[f, seg + a, z] += wa * X[m, z]
 
 
-@jit
-def fold_prediction_errors(s_all, fold, X, C, M, nseg, out):
-    """``out[m] = |X_m - x_f(t_m)|^2`` with ``x_f`` the spline of control points ``C[f]`` (F, n, d),
-    ``f = fold[m]``: the error of predicting each pose from a fit that did not see it."""
-    k = M.shape[0]
-    d = X.shape[1]
-    b = np.empty(k)
-    bd = np.empty(k)
-    for m in range(s_all.shape[0]):
-        seg, u = _segment(s_all[m], nseg)
-        basis_into(M, u, 1.0, b, bd, bd)
-        f = fold[m]
-        e2 = 0.0
-        for z in range(d):
-            acc = 0.0
-            for j in range(k):
-                acc += b[j] * C[f, seg + j, z]
-            e = X[m, z] - acc
-            e2 += e * e
-        out[m] = e2
-
-
-@jit
-def spline_derivative(s_all, C, M, nseg, inv_dt, r, out):
-    """``r``-th time derivative (r = 0, 1, 2) of the ordinary B-spline with control points C (n, d)."""
-    k = M.shape[0]
-    d = C.shape[1]
-    b = np.empty(k)
-    bd = np.empty(k)
-    bdd = np.empty(k)
-    for m in range(s_all.shape[0]):
-        seg, u = _segment(s_all[m], nseg)
-        basis_into(M, u, inv_dt, b, bd, bdd)
-        for z in range(d):
-            acc = 0.0
-            for j in range(k):
-                x = b[j] if r == 0 else (bd[j] if r == 1 else bdd[j])
-                acc += x * C[seg + j, z]
-            out[m, z] = acc
-
-
 # ------------------------------------------------------------------- banded solves
 @jit
 def blocks_to_band(H, out):
