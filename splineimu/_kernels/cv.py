@@ -13,21 +13,10 @@ each (k, d) gets its own machine code with fixed loop counts (unrolled: 2x faste
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from .._jit import jit
-
-
-@jit
-def _segment(s, nseg):
-    seg = int(math.floor(s))
-    if seg < 0:
-        seg = 0
-    elif seg > nseg - 1:
-        seg = nseg - 1
-    return seg, s - seg
+from .spline import _segment
 
 
 @jit

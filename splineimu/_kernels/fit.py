@@ -317,13 +317,39 @@ def blocks_to_band(H, out):
 
 
 @jit
+def band_factored_solve(U, B):
+    """Solve ``U^T U X = B`` in place of ``B`` (n, m) with the upper band factor ``U`` (n, w) that
+    :func:`band_cholesky_solve` leaves in its matrix argument."""
+    n = U.shape[0]
+    w = U.shape[1]
+    m = B.shape[1]
+    # U^T y = b
+    for i in range(n):
+        for z in range(m):
+            s = B[i, z]
+            for q in range(1, w):
+                if i - q < 0:
+                    break
+                s -= U[i - q, q] * B[i - q, z]
+            B[i, z] = s / U[i, 0]
+    # U x = y
+    for i in range(n - 1, -1, -1):
+        for z in range(m):
+            s = B[i, z]
+            for c in range(1, w):
+                if i + c >= n:
+                    break
+                s -= U[i, c] * B[i + c, z]
+            B[i, z] = s / U[i, 0]
+
+
+@jit
 def band_cholesky_solve(A, B):
     """Solve ``A X = B`` in place of ``B`` (n, m) for the symmetric positive definite band
     matrix with upper diagonals ``A`` (n, w) (``A[i, c]`` = entry (i, i + c)); ``A`` is
     overwritten by its factor ``U`` (A = U^T U). Returns False if A is not positive definite."""
     n = A.shape[0]
     w = A.shape[1]
-    m = B.shape[1]
     for i in range(n):
         for c in range(w):
             if i + c >= n:
@@ -339,22 +365,5 @@ def band_cholesky_solve(A, B):
                 A[i, 0] = np.sqrt(s)
             else:
                 A[i, c] = s / A[i, 0]
-    # U^T y = b
-    for i in range(n):
-        for z in range(m):
-            s = B[i, z]
-            for q in range(1, w):
-                if i - q < 0:
-                    break
-                s -= A[i - q, q] * B[i - q, z]
-            B[i, z] = s / A[i, 0]
-    # U x = y
-    for i in range(n - 1, -1, -1):
-        for z in range(m):
-            s = B[i, z]
-            for c in range(1, w):
-                if i + c >= n:
-                    break
-                s -= A[i, c] * B[i + c, z]
-            B[i, z] = s / A[i, 0]
+    band_factored_solve(A, B)
     return True

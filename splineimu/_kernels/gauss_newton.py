@@ -27,7 +27,7 @@ import math
 import numpy as np
 
 from .._jit import jit
-from .lie import JAC_SMALL_ANGLE, so3_jacobian_inv_into
+from .lie import JAC_SMALL_ANGLE, _i_plus_bk_ck2_into, so3_jacobian_inv_into
 from .spline import _segment
 
 
@@ -89,6 +89,16 @@ def so3_knot_terms(qc, D, C):
         so3_jacobian_inv_into(d0, d1, d2, -1.0, C[i])
 
 
+@jit(inline="always")
+def _store_unit(out, i, p0, p1, p2, p3):
+    """``out[i] = p / |p|`` for a quaternion p (w, x, y, z)."""
+    nrm = math.sqrt(p0 * p0 + p1 * p1 + p2 * p2 + p3 * p3)
+    out[i, 0] = p0 / nrm
+    out[i, 1] = p1 / nrm
+    out[i, 2] = p2 / nrm
+    out[i, 3] = p3 / nrm
+
+
 @jit
 def so3_retract(qc, delta, out):
     """``out[i] = q_i Exp(delta_i)`` (unit quaternions, renormalized)."""
@@ -98,11 +108,7 @@ def so3_retract(qc, delta, out):
         z = delta[i, 2]
         _, _, _, qw, qs = _coeffs(x * x + y * y + z * z)
         p0, p1, p2, p3 = _quat_mul(qc[i, 0], qc[i, 1], qc[i, 2], qc[i, 3], qw, qs * x, qs * y, qs * z)
-        nrm = math.sqrt(p0 * p0 + p1 * p1 + p2 * p2 + p3 * p3)
-        out[i, 0] = p0 / nrm
-        out[i, 1] = p1 / nrm
-        out[i, 2] = p2 / nrm
-        out[i, 3] = p3 / nrm
+        _store_unit(out, i, p0, p1, p2, p3)
 
 
 @jit
@@ -127,29 +133,7 @@ def quat_slerp(t, q, tq, out):
         z *= u
         _, _, _, qw, qs = _coeffs(x * x + y * y + z * z)
         p0, p1, p2, p3 = _quat_mul(q[i, 0], q[i, 1], q[i, 2], q[i, 3], qw, qs * x, qs * y, qs * z)
-        nrm = math.sqrt(p0 * p0 + p1 * p1 + p2 * p2 + p3 * p3)
-        out[m, 0] = p0 / nrm
-        out[m, 1] = p1 / nrm
-        out[m, 2] = p2 / nrm
-        out[m, 3] = p3 / nrm
-
-
-@jit(inline="always")
-def _i_bk_ck2_into(x, y, z, b, c, out):
-    """``out = I + b K + c K^2`` for K = [x, y, z]x: Exp with (b, c) = (a, b) of :func:`_coeffs`,
-    Jr with (-b, c)."""
-    xx = x * x
-    yy = y * y
-    zz = z * z
-    out[0, 0] = 1.0 - c * (yy + zz)
-    out[0, 1] = -b * z + c * x * y
-    out[0, 2] = b * y + c * x * z
-    out[1, 0] = b * z + c * x * y
-    out[1, 1] = 1.0 - c * (xx + zz)
-    out[1, 2] = -b * x + c * y * z
-    out[2, 0] = -b * y + c * x * z
-    out[2, 1] = b * x + c * y * z
-    out[2, 2] = 1.0 - c * (xx + yy)
+        _store_unit(out, m, p0, p1, p2, p3)
 
 
 @jit
@@ -205,11 +189,7 @@ def control_grid_init(t, q, tc, a1, a2, out):
         x2 = c1 * (x2 + y2) + c2 * z2
         _, _, _, qw, qs = _coeffs(x0 * x0 + x1 * x1 + x2 * x2)
         p0, p1, p2, p3 = _quat_mul(F[i, 0], F[i, 1], F[i, 2], F[i, 3], qw, qs * x0, qs * x1, qs * x2)
-        nrm = math.sqrt(p0 * p0 + p1 * p1 + p2 * p2 + p3 * p3)
-        out[i, 0] = p0 / nrm
-        out[i, 1] = p1 / nrm
-        out[i, 2] = p2 / nrm
-        out[i, 3] = p3 / nrm
+        _store_unit(out, i, p0, p1, p2, p3)
 
 
 @jit(inline="always")
@@ -317,13 +297,13 @@ def so3_pass(s_all, w_all, q_meas, qc, D, C, Mc, nseg, want_h, band, g, res):
             for c in range(3):
                 P[k - 1, r, c] = 1.0 if r == c else 0.0
         for j in range(k - 1, 0, -1):
-            _i_bk_ck2_into(X[j, 0], X[j, 1], X[j, 2], cf[j, 0], cf[j, 1], A)
+            _i_plus_bk_ck2_into(X[j, 0], X[j, 1], X[j, 2], cf[j, 0], cf[j, 1], A)
             for r in range(3):
                 for c in range(3):
                     P[j - 1, r, c] = A[r, 0] * P[j, 0, c] + A[r, 1] * P[j, 1, c] + A[r, 2] * P[j, 2, c]
         # Y_j = b_j P_j^T Jr(x_j)
         for j in range(1, k):
-            _i_bk_ck2_into(X[j, 0], X[j, 1], X[j, 2], -cf[j, 1], cf[j, 2], J)
+            _i_plus_bk_ck2_into(X[j, 0], X[j, 1], X[j, 2], -cf[j, 1], cf[j, 2], J)
             for r in range(3):
                 for c in range(3):
                     Y[j, r, c] = b[j] * (P[j, 0, r] * J[0, c] + P[j, 1, r] * J[1, c] + P[j, 2, r] * J[2, c])
@@ -408,31 +388,6 @@ def increment_penalty(D, Jr_inv, Jl_inv, mu, want_h, band, g):
                                 s += B[a, z, r] * B[bb, z, c]
                             band[row + r, off] += mj * s
     return cost
-
-
-@jit
-def band_factored_solve(U, B):
-    """Solve ``U^T U X = B`` in place of ``B`` (n, m) with the upper band factor ``U`` (n, w) that
-    :func:`splineimu._kernels.fit.band_cholesky_solve` leaves in its matrix argument."""
-    n = U.shape[0]
-    w = U.shape[1]
-    m = B.shape[1]
-    for i in range(n):
-        for z in range(m):
-            s = B[i, z]
-            for q in range(1, w):
-                if i - q < 0:
-                    break
-                s -= U[i - q, q] * B[i - q, z]
-            B[i, z] = s / U[i, 0]
-    for i in range(n - 1, -1, -1):
-        for z in range(m):
-            s = B[i, z]
-            for c in range(1, w):
-                if i + c >= n:
-                    break
-                s -= U[i, c] * B[i + c, z]
-            B[i, z] = s / U[i, 0]
 
 
 @jit

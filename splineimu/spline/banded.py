@@ -97,5 +97,5 @@ class BandSolver:
                 raise np.linalg.LinAlgError("banded normal matrix is not positive definite")
             self._factor, self._lam = U, lam
         else:
-            _gn.band_factored_solve(self._factor, B)
+            _kf.band_factored_solve(self._factor, B)
         return B.reshape(np.shape(rhs))
