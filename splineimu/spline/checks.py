@@ -229,10 +229,10 @@ def input_warnings(t, P, theta, res_pos, res_rot, keep, choice=None):
             out.append(FitWarning("residual_above_noise", f"the {key} fit residual ({rms:.3g} {unit} RMS) is "
                                   f"{rms / noise:.1f}x the {how} pose noise ({noise:.3g} {unit}): the knot spacing "
                                   f"is too coarse for the motion, or the poses hold steps"))
-    frac = {key: _top_octave_fraction(t, X, r) for key, X, _, _, r, _ in parts}
-    limited = {key: (choice[key]["motion_limited"] if choice is not None else motion_limited(X))
-               for key, X, *_ in parts}
-    hit = [(key, imu) for key, _, _, _, _, imu in parts if limited[key] and frac[key] > TOP_OCTAVE_POWER]
+    # the spectra only where the input is motion-limited (the choice has already said so)
+    frac = {key: _top_octave_fraction(t, X, r) for key, X, _, _, r, _ in parts
+            if (choice[key]["motion_limited"] if choice is not None else motion_limited(X))}
+    hit = [(key, imu) for key, _, _, _, _, imu in parts if frac.get(key, 0.0) > TOP_OCTAVE_POWER]
     if hit:
         nyq = 0.5 / float(np.median(np.diff(t)))
         what = ", ".join(f"{100 * frac[k]:.2g}% of the {imu} power" for k, imu in hit)
