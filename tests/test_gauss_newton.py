@@ -225,7 +225,7 @@ def test_band_factored_solve_reuses_the_factor():
 
 
 def test_quat_increments_match_rotation_signal():
-    from splineimu.spline.knots import rotation_signal
+    from splineimu.spline.signals import rotation_signal
 
     rng = np.random.default_rng(6)
     R = lie.so3_exp(np.cumsum(rng.normal(size=(200, 3)) * 0.2, axis=0))

@@ -481,7 +481,7 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
 
     probs = problems(w)
     Rc0 = probs[0].initial_rotations()
-    theta = np.zeros((t.size, 3))  # accumulated body-frame increments (knots.rotation_signal)
+    theta = np.zeros((t.size, 3))  # accumulated body-frame increments (signals.rotation_signal)
     _gn.quat_increments(q, theta[1:])
     np.cumsum(theta, axis=0, out=theta)
     dropped = np.zeros(t.size, dtype=bool)

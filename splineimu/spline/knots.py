@@ -86,11 +86,11 @@ from functools import cache
 
 import numpy as np
 
-from .. import lie
 from .._kernels import cv as _kcv
 from .banded import DEFAULT_SMOOTHNESS, SPARSE_SMOOTHNESS, difference_coefficients, layout
 from .basis import blending_matrix
 from .report import WARN_ACCEL_M_S2, WARN_GYRO_RAD_S, FitWarning
+from .signals import accumulate, max_rotation_spacing, rotation_increments
 
 ORDERS = (4, 5, 6)
 N_FOLDS = 4
@@ -103,9 +103,6 @@ _STEP = 1.6
 _ORDER_PREFERENCE = 0.02
 #: Score ratio to the best beyond which finer grid spacings stop being scored (see _search).
 _PRUNE = 3.0
-#: The rotation spline's neighbouring control rotations may turn by at most this at the
-#: input's fastest rate (increments are taken as the shortest turn, below pi).
-MAX_CONTROL_TURN_RAD = np.pi / 3
 #: Ratio between neighbouring spacings where the derivative's error is predicted.
 _LADDER = 1.25
 #: Fraction of each window's span at both ends left out of the score (one-sided data).
@@ -130,51 +127,6 @@ def _penalty(k):
     """Coefficients of the difference penalty of an order-k fit (3rd differences at most), as
     a tuple (its length is compiled in)."""
     return tuple(float(c) for c in difference_coefficients(min(3, k - 1)))
-
-
-def max_rotation_spacing(t, R):
-    """Largest rotation knot spacing over which the input turns by at most
-    :data:`MAX_CONTROL_TURN_RAD` anywhere (neighbouring control rotations must stay well within
-    the shortest-turn range of their increments). Angles are measured over the spacing itself,
-    so pose noise does not shrink the limit."""
-    n = t.size
-    h = float(np.median(np.diff(t))) if n > 1 else 1.0
-
-    Rf = np.ascontiguousarray(R).reshape(n, 9)
-
-    def within(m):
-        """Whether the input turns by at most the limit over every m poses; the angle comes from
-        the trace of the relative rotation, and from its Log (as the fit measures it) when
-        that is within 1e-6 rad of the limit."""
-        # windows that span a gap are left out (the fit bridges gaps with the smoothest turn)
-        ok = (t[m:] - t[:-m]) <= 1.5 * m * h + 2.0 * h
-        if not ok.any():
-            return True
-        tr = np.einsum("ij,ij->i", Rf[:-m], Rf[m:])
-        ang = float(np.arccos(np.clip((np.min(tr[ok]) - 1.0) / 2.0, -1.0, 1.0)))
-        if abs(ang - MAX_CONTROL_TURN_RAD) < 1e-6:
-            ang = float(np.max(np.linalg.norm(lie.so3_log(np.matmul(np.swapaxes(R[:-m][ok], 1, 2), R[m:][ok])),
-                                              axis=1)))
-        return ang <= MAX_CONTROL_TURN_RAD
-
-    if n < 2 or not within(1):
-        return 0.7 * h
-    m = 1
-    while 2 * m < n and within(2 * m):
-        m *= 2
-    if 2 * m >= n:
-        return np.inf
-    lo_m, hi_m = m, 2 * m  # within(lo_m), not within(hi_m)
-    while hi_m - lo_m > max(1, lo_m // 8):
-        mid = (lo_m + hi_m) // 2
-        lo_m, hi_m = (mid, hi_m) if within(mid) else (lo_m, mid)
-    return lo_m * h
-
-
-def rotation_signal(R):
-    """Accumulated body-frame increments (N, 3) of rotations R (N, 3, 3)."""
-    inc = lie.so3_log(np.matmul(np.swapaxes(R[:-1], 1, 2), R[1:]))
-    return np.vstack([np.zeros(3), np.cumsum(inc, axis=0)])
 
 
 class _Window:
@@ -246,13 +198,18 @@ class _Window:
         return (self.X - d)[self.scored]
 
 
-def _windows(t, X, w):
+def _windows(t, X, w, increments=False):
+    """The stretches cross-validated: all of the input, or for long inputs :data:`_N_WINDOWS`
+    spread evenly. With ``increments`` X holds the (N - 1, 3) increments of the signal, summed
+    from zero in each window: a sum carried over an hour of rotation (thousands of radians)
+    rounds each step by ~1e-13 rad, noise that would make exact input look noisy."""
     n = t.size
     if n <= MAX_CV_POSES:
-        return [_Window(t, X, w)]
+        return [_Window(t, np.ascontiguousarray(accumulate(X) if increments else X), w)]
     size = MAX_CV_POSES // _N_WINDOWS
     starts = np.linspace(0, n - size, _N_WINDOWS).astype(int)
-    return [_Window(t[a:a + size], X[a:a + size], w[a:a + size]) for a in starts]
+    return [_Window(t[a:a + size], np.ascontiguousarray(accumulate(X[a:a + size - 1]) if increments else X[a:a + size]),
+                    w[a:a + size]) for a in starts]
 
 
 def _correlation_lag(res):
@@ -450,11 +407,12 @@ def _walk_ladder(windows, k, ladder, noises, r, lo, hi):
     return ladder, var, bias2, ends
 
 
-def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf):
+def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, increments=False):
     """Order and spacing (at most ``dt_max``) for an ordinary B-spline fit of signal X (N, 3)
-    whose r-th derivative matters; returns a dict (see :func:`choose_knot_spacing`)."""
+    (or, with ``increments``, of the sums of X (N - 1, 3)) whose r-th derivative matters;
+    returns a dict (see :func:`choose_knot_spacing`)."""
     orders = tuple(int(k) for k in orders)
-    windows = _windows(t, X, w)
+    windows = _windows(t, X, w, increments)
     h = float(np.median(np.diff(t)))
     span = min(wd.t[-1] - wd.t[0] for wd in windows)
     lo = 0.7 * h
@@ -556,8 +514,8 @@ def choose_knot_spacing(t, P, R, w=None, rotation_order="auto", position_order="
     w = np.ones(t.size) if w is None else np.asarray(w, dtype=np.float64)
     ro = ORDERS if rotation_order == "auto" else (int(rotation_order),)
     po = ORDERS if position_order == "auto" else (int(position_order),)
-    rot = choose_signal(t, np.ascontiguousarray(rotation_signal(R)), w, 1, ro, rotation_dt,
-                        max_rotation_spacing(t, R))
+    rot = choose_signal(t, rotation_increments(R), w, 1, ro, rotation_dt, max_rotation_spacing(t, R),
+                        increments=True)
     pos = choose_signal(t, np.ascontiguousarray(P), w, 2, po, position_dt)
     return {
         "rotation": rot, "position": pos,
