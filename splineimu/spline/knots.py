@@ -22,28 +22,28 @@ Method
    residual's periodogram by it estimates the noise spectrum from about the fit's cut-off up,
    continued flat below (white, AR(1) and upsampled noise are flat there). A series with that
    spectrum is drawn. The spectrum is read from the coarser of the two cross-validated fits
-   (0.1 s blocks see more of correlated noise) and continued for one octave below its cut-off
-   with the log-log slope it has over the octave above (median over the windows, at most
-   flat), flat beyond: the derivative's noise error is the spectrum times f^2 (gyro) or f^4
-   (accel), so a spectrum rising toward low frequency puts it below the cut-off. BROAD
-   orientation noise, measured against the real gyro, falls as f^-3.5 from 40 to 90 Hz and as
-   f^-1.7 from 20 to 40 Hz: the flat continuation missed up to 7x of it and the ladder read it
-   as the bias of coarser rungs (gyro spacings 8-23 ms where 19-32 ms is best; now 24-38 ms);
-   BROAD 03 and 34 (slow motion, <0.1 mm noise) got 9.5 ms position spacings and 4.1-4.4x the
-   best fixed accel error (now 36 ms, 0.93-1.02x). White, AR(1) and upsampled noise are flat
-   above the cut-off and keep the flat continuation. Motion-limited input (step 4) keeps it
-   too: its residual is motion.
+   (0.1 s blocks see more of correlated noise) and continued below its cut-off from its level
+   on the octave above's trend (the cut-off bin, where the measured transfer first reaches
+   0.2, reads up to 3.7x low), for one octave with that octave's log-log slope (median over
+   the windows, within [-2, 0]), flat beyond: the derivative's noise error is the spectrum
+   times f^2 (gyro) or f^4 (accel), so a spectrum rising toward low frequency puts it below the
+   cut-off. BROAD orientation noise against the real gyro is f^-2 from 12 to 40 Hz, steeper
+   above (07: f^-3.8 over 31-63 Hz); the surrogate matches it within 0.8-1.35x there in BROAD
+   07, 18 and 32 (0.5x in 07 with an unbounded slope, 2.6-3.5x low in 32 from the cut-off bin;
+   a flat continuation missed up to 7x). White, AR(1) and upsampled noise are flat above the
+   cut-off and stay flat; so does motion-limited input (step 4), whose residual is motion.
 3. **The derivative's error on a ladder** of spacings (steps of 1.25x around the value-optimal
    one, per order): signal and surrogate are fitted together; the noise part is the surrogate
    fit's derivative, the bias part the change of the signal fit's derivative from the rung
    below less the surrogate's change. While the smallest error sits at an end of the ladder
    and the error falls over the two rungs before it, the ladder is walked on past that end,
    toward coarser spacings up to :data:`WALK_MAX_S` (hand-held mocap: the accelerometer's
-   optimum is 2-3x the value-optimal spacing, beyond the +-2 rungs). The (order, spacing)
-   with the smallest predicted error wins (for the position, after half a rung either side of
-   it is tried too: near the steep bias rise of narrow-band motion the accelerometer's error
-   changes by 20-30% per rung; the flips scene got 1.25x the best fixed accel error, BROAD 11
-   1.035x scipy's low-passed one), and that prediction is reported
+   optimum is 2-3x the value-optimal spacing, beyond the +-2 rungs); no rung lies beyond it
+   unless the value-optimal spacing does (BROAD 11 position: the +2 rung, 56 ms, won on a
+   lagging bias estimate, accel lp10 1.035x scipy). The (order, spacing) with the smallest
+   predicted error wins (for the position, after half a rung either side of it is tried too:
+   near the steep bias rise of narrow-band motion the accelerometer's error changes by 20-30%
+   per rung; the flips scene got 1.25x the best fixed accel error), and that prediction is reported
    (``predicted_gyro_rms_rad_s``, ``predicted_accel_rms_m_s2``); the same profile over the
    first and last ``k`` spacings gives the error at the ends. The accelerometer's prediction
    adds gravity tilted by the rotation fit's own (value) error, from the same ladder at r = 0
@@ -71,18 +71,18 @@ of the implementation they replaced (its reported figures to 1e-13 on noisy and 
 (candidates from tabulated transfer functions), which moves the flat cross-validation optima by
 a grid step.
 
-Where it fails: noise correlated over longer than the motion's own time scale is motion to
-any method that sees only the poses (it is kept); noise whose level changes along the
-recording (tracking worse during fast motion) is estimated as its average, so the fast parts
-get too little smoothing; noise whose spectrum rises below the cut-off of the coarser
-cross-validated fit by more than the octave's slope shows is underestimated there, and the
-ladder reads the noise a coarser rung removes as that rung's bias (BROAD 32 orientation: 29
-ms against the best 32 ms, the synthesized gyro 6% above the real IMU's content above 15 Hz);
-a coarser fit's residual that holds motion is read as noise and smooths more than needed
-(EuRoC V1_02 200 Hz position 17 -> 41 ms, accel lp10 1.003x -> 1.06x the best; BROAD 11
-56 ms, accel lp10 1.035x scipy); a trajectory whose character changes (rest, then
-fast motion) gets one spacing per quantity for the whole of it; smooth input sampled so
-sparsely that its top octave holds neither noise nor motion is taken as noise-limited.
+Where it fails: noise correlated over longer than the motion's own time scale is motion to any
+method that sees only the poses (it is kept); noise whose level changes along the recording
+(tracking worse during fast motion) is estimated as its average, so the fast parts get too
+little smoothing; noise whose spectrum below the cut-off departs from the octave above's trend
+is misjudged there, and the ladder reads the difference as bias; a coarser fit's residual that
+holds motion is read as noise and smooths more than needed (EuRoC V1_02 200 Hz position 41 ms,
+accel lp10 1.06x the best; BROAD 11 position: motion at 10-13 Hz, the surrogate 1.25-1.6x the
+real noise from 4 to 14 Hz); the bias estimate (the change from the rung below) lags the true
+bias once the fit cuts into the motion, which only the spacing limits contain; a trajectory
+whose character changes (rest, then fast motion) gets one spacing per quantity for the whole of
+it; smooth input sampled so sparsely that its top octave holds neither noise nor motion is
+taken as noise-limited.
 """
 
 from __future__ import annotations
@@ -122,6 +122,8 @@ WALK_MAX_S = 0.05
 GRAVITY_M_S2 = 9.81
 #: The residual autocorrelation below which noise counts as uncorrelated.
 _ACF_LEVEL = 0.1
+#: Steepest slope of the noise spectrum's continuation below its cut-off (f^-2: white rate).
+_MIN_NOISE_SLOPE = -2.0
 
 
 @cache
@@ -292,12 +294,15 @@ def motion_limited(X):
 
 def _noise_spectrum(wd, k, dt_cv, rng):
     """Smoothed periodogram (M, 3) of the pose noise from the fit at the value-optimal spacing,
-    valid from index ``first`` up (None: nowhere), and its log-log slope over the octave above.
+    valid from index ``first`` up (None: nowhere), its log-log slope over the octave above, and
+    its level (3,) at ``first`` on that slope.
 
     The residual of that fit is the pose noise times the fit's residual transfer ``(1 -
     H(f))^2`` (and motion the fit misses); that transfer is measured by passing a white draw
     through the same fit, and the residual's periodogram divided by it where it is at least 0.2
-    (from about the fit's cut-off up)."""
+    (from about the fit's cut-off up). The level at ``first`` is the octave's mean detrended by
+    its slope: the bin ``first`` itself, where the noisy measured transfer first reaches 0.2,
+    reads low (the transfer is overestimated there; BROAD orientation: 1.2-3.7x)."""
     white = rng.normal(size=wd.X.shape)
     both = np.ascontiguousarray(np.hstack([wd.X, white]))
     res = both - wd.derivative(k, dt_cv, wd.zero, 1, 0, both)[0]
@@ -314,31 +319,33 @@ def _noise_spectrum(wd, k, dt_cv, rng):
     gain = np.mean(spectrum(res[:, 3:]) / np.maximum(spectrum(white), 1e-300), axis=1)
     ok = np.flatnonzero(gain >= 0.2)
     if not ok.size:
-        return P, None, np.nan
+        return P, None, np.nan, None
     first = ok[0]
     P[first:] /= np.maximum(gain[first:, None], 0.2)
     band = np.arange(max(first, 1), min(2 * first, P.shape[0] - 1) + 1)
     slope = np.polyfit(np.log(band), np.log(P[band].sum(axis=1)), 1)[0] if band.size >= 4 else np.nan
-    return P, first, slope
+    level = np.mean(P[band] * (first / band)[:, None] ** slope, axis=0) if np.isfinite(slope) else P[first].copy()
+    return P, first, slope, level
 
 
 def _noise_surrogates(windows, k, dt_cv, seed=7, follow=True):
     """Noise series (N, 3) per window with the spectrum of the pose noise, for propagation
     through fits: :func:`_noise_spectrum` drawn with random phases, continued below its cut-off
-    flat or (``follow``) with the median over the windows of its slope over the octave above,
-    at most flat, for one octave (the spacings up to twice the fit's, where the ladder weighs
-    noise against bias) and flat beyond. White, AR(1) and upsampled noise are flat or nearly so
-    above the cut-off and stay flat; noise rolling off above its own corner (mocap filters)
-    keeps rising below it."""
+    from its level there, flat or (``follow``) with the median over the windows of its slope
+    over the octave above, within [:data:`_MIN_NOISE_SLOPE`, 0], for one octave (the spacings
+    up to twice the fit's, where the ladder weighs noise against bias) and flat beyond. White,
+    AR(1) and upsampled noise are flat or nearly so above the cut-off and stay flat; noise
+    rolling off above its own corner (mocap filters) keeps rising below it, but not faster than
+    f^-2 (BROAD orientation against the real gyro: f^-2 from 12 to 40 Hz, f^-3.8 above 31 Hz)."""
     rngs = [np.random.default_rng(seed) for _ in windows]
     spectra = [_noise_spectrum(wd, k, dt_cv, rng) for wd, rng in zip(windows, rngs)]
-    slopes = [sl for _, first, sl in spectra if first is not None and np.isfinite(sl)]
-    slope = min(float(np.median(slopes)), 0.0) if slopes and follow else 0.0
+    slopes = [sl for _, first, sl, _ in spectra if first is not None and np.isfinite(sl)]
+    slope = float(np.clip(np.median(slopes), _MIN_NOISE_SLOPE, 0.0)) if slopes and follow else 0.0
     out = []
-    for (P, first, _), rng, wd in zip(spectra, rngs, windows):
+    for (P, first, _, level), rng, wd in zip(spectra, rngs, windows):
         if first is not None:
             f = np.maximum(np.arange(first), first / 2.0)
-            P[:first] = P[first] * (f / first)[:, None] ** slope
+            P[:first] = level * (f / first)[:, None] ** slope
         phase = np.exp(2j * np.pi * rng.random(P.shape))
         phase[0] = 1.0
         out.append(np.fft.irfft(np.sqrt(P) * phase, wd.X.shape[0], axis=0))
@@ -467,7 +474,9 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
         # motion-limited input is walked only toward finer spacings, and may go below the grid
         # (toward interpolation); the rung below the first one kept is its reference
         lo_k = lo * (0.5 if limited else 1.0)
-        ok = (ladder >= lo_k * 0.99) & (ladder <= hi * (1.0 + 1e-9))
+        # no rung beyond WALK_MAX_S either, unless the value-optimal spacing is beyond it
+        hi_k = min(hi, WALK_MAX_S) if dt_fixed is None and dt_cv < WALK_MAX_S else hi
+        ok = (ladder >= lo_k * 0.99) & (ladder <= hi_k * (1.0 + 1e-9))
         first = max(int(np.argmax(ok)) - 1, 0)
         ladder = np.r_[ladder[first], ladder[first + 1:][ok[first + 1:]]]
         if dt_fixed is None:

@@ -1,0 +1,52 @@
+"""The knot choice's noise surrogate against the noise it stands for: its power in the octave
+above the fit's cut-off (measured there) and in the octave below (continued from the level on
+the octave's trend with the octave's slope, bounded to [-2, 0])."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from splineimu.spline import knots
+
+RATE_HZ = 200.0
+
+
+def _noise(kind, n, rng):
+    """(n, 3) pose noise: white, AR(1) with a 30 ms correlation time (f^-2 above 5 Hz), or that
+    AR(1) low-passed once more at the same corner (f^-4 above it)."""
+    if kind == "white":
+        return 1e-3 * rng.normal(size=(n, 3))
+    rho = np.exp(-1.0 / (RATE_HZ * 0.03))
+    x = np.zeros((n, 3))
+    y = np.zeros((n, 3))
+    e = 1e-3 * np.sqrt(1.0 - rho**2) * rng.normal(size=(n, 3))
+    for i in range(1, n):
+        x[i] = rho * x[i - 1] + e[i]
+        y[i] = rho * y[i - 1] + (1.0 - rho) * x[i]
+    return x if kind == "ar1" else 10.0 * y  # "steep"
+
+
+def _band_power(x, f, lo, hi):
+    P = (np.abs(np.fft.rfft(x - x.mean(axis=0), axis=0)) ** 2).sum(axis=1)
+    return P[(f >= lo) & (f < hi)].mean()
+
+
+# measured (seed 3, k4, 30 and 50 ms): below 0.97 / 1.26-1.32 / 0.67-0.76, above 0.99-1.05
+@pytest.mark.parametrize("kind, below", [("white", (0.8, 1.25)), ("ar1", (0.9, 1.6)), ("steep", (0.5, 0.95))])
+@pytest.mark.parametrize("dt", [0.03, 0.05])
+def test_surrogate_power_around_the_cut_off(kind, below, dt):
+    t = np.arange(0.0, 60.0, 1.0 / RATE_HZ)
+    motion = 0.5 * np.c_[np.sin(2 * np.pi * 0.3 * t), np.cos(2 * np.pi * 0.5 * t), np.sin(2 * np.pi * 0.2 * t + 1)]
+    noise = _noise(kind, t.size, np.random.default_rng(3))
+    windows = knots._windows(t, np.ascontiguousarray(motion + noise), np.ones(t.size))
+    first = knots._noise_spectrum(windows[0], 4, dt, np.random.default_rng(7))[1]
+    surrogate = knots._noise_surrogates(windows, 4, dt)[0]
+    f = np.fft.rfftfreq(t.size, 1.0 / RATE_HZ)
+    fc = first / (t[-1] - t[0])
+    above = _band_power(surrogate, f, fc, 2 * fc) / _band_power(noise, f, fc, 2 * fc)
+    ratio = _band_power(surrogate, f, fc / 2, fc) / _band_power(noise, f, fc / 2, fc)
+    assert 0.85 <= above <= 1.2, above
+    # white stays flat, AR(1) follows f^-2 (a little above its flattening toward 5 Hz), the
+    # f^-4 roll-off is continued at f^-2 only (steeper noise drifts like motion)
+    assert below[0] <= ratio <= below[1], ratio
