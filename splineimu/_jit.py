@@ -36,6 +36,8 @@ from __future__ import annotations
 import contextlib
 import functools
 import os
+import sys
+import weakref
 
 import numba
 
@@ -75,7 +77,8 @@ def _load_cached(cache, sig, target_context):
         return cache._load_overload(sig, target_context)
     if not cache._enabled:
         return None
-    data = cache._cache_file.load(cache._index_key(sig, codegen))
+    with _numba_environments_unimported():
+        data = cache._cache_file.load(cache._index_key(sig, codegen))
     if data is None:
         return None
     # CompileResult._reduce's payload: (library, fndesc, environment, ...)
@@ -152,6 +155,45 @@ def _deferred_symbols(engine):
 
         engine.is_symbol_defined = is_symbol_defined
     return pending
+
+
+@contextlib.contextmanager
+def _numba_environments_unimported():
+    """Unpickle the environments of numba's own implementations without importing their modules.
+
+    A cached kernel refers to the environment (globals and constants) of every function in its
+    code, among them numba's ``np.empty`` and ``np.zeros`` from ``numba.np.arrayobj``, whose import
+    (0.04-0.06 s of CPU, measured) numba's unpickling makes only to hand the module's dict to the
+    environment. Compiled nopython code reads an environment's constants, never its globals (only
+    object-mode code looks names up there), so a module of numba not imported yet gets a dict
+    that holds its name; anything else (an imported module, any other package) goes through numba.
+    """
+    from numba.core import environment
+
+    own = getattr(environment, "_rebuild_env", None)
+    if not (callable(own) and hasattr(environment, "lookup_environment")
+            and isinstance(getattr(environment.Environment, "_memo", None), weakref.WeakValueDictionary)):
+        yield
+        return
+
+    def _rebuild_env(modname, consts, env_name):
+        if not (isinstance(modname, str) and modname.startswith("numba.")) or modname in sys.modules:
+            return own(modname, consts, env_name)
+        env = environment.lookup_environment(env_name)
+        if env is None:
+            env = environment.Environment({"__name__": modname})
+            env.consts[:] = consts
+            env.env_name = env_name
+            environment.Environment._memo[env_name] = env
+        return env
+
+    # pickled by reference as numba's own, should anything pickle an environment meanwhile
+    _rebuild_env.__module__, _rebuild_env.__qualname__ = own.__module__, own.__qualname__
+    environment._rebuild_env = _rebuild_env
+    try:
+        yield
+    finally:
+        environment._rebuild_env = own
 
 
 @contextlib.contextmanager
