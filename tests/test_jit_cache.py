@@ -102,6 +102,8 @@ cres = f.overloads[f.signatures[0]]
 lib = cres.library
 print("deferred" if "_shared_bitcode" in lib.__dict__ else "parsed")
 print("numba.np.arrayobj" in sys.modules)  # np.empty's environment came without its module
+from numba.core.runtime import nrt
+print("deferred" if "_shared_bitcode" in nrt.rtsys.library.__dict__ else "parsed")  # numba's runtime: cached
 # a kernel compiled after the loads (not cached) calls the loaded ones: their modules are linked in
 outer = numba.njit(lambda x: linkkernel.scaled_sum(x, 2.0) + linkkernel.doubled(x)[1] + np.empty(3).size)
 print(outer(x))
@@ -124,12 +126,14 @@ def test_kernel_compiled_after_cache_loads_links_the_loaded_kernels(tmp_path):
         assert out.returncode == 0, out.stderr
         return out.stdout.split("\n")
 
-    first = run()  # compiles and fills the cache
-    assert first[1:3] == ["parsed", "True"]
+    first = run()  # compiles (numba's runtime too) and fills the cache
+    assert first[1:4] == ["parsed", "True", "parsed"]
+    assert list(tmp_path.glob("__pycache__/splineimu-nrt.*.nbo"))
     lines = run()
     assert [float(v) for v in lines[0].split()] == [20.0, 20.0]
-    assert lines[1:3] == ["deferred", "False"]  # loaded without parsing bitcode or importing arrayobj
-    assert float(lines[3]) == pytest.approx(25.0, rel=0, abs=0)  # 20 + 2 + 3
-    assert lines[4] == "parsed"  # parsed for linking into the new kernel
-    assert lines[5] == "True False"
-    assert lines[6] == "1 0"
+    # loaded without parsing bitcode or importing arrayobj, numba's runtime from the cache
+    assert lines[1:4] == ["deferred", "False", "deferred"]
+    assert float(lines[4]) == pytest.approx(25.0, rel=0, abs=0)  # 20 + 2 + 3
+    assert lines[5] == "parsed"  # parsed for linking into the new kernel
+    assert lines[6] == "True False"
+    assert lines[7] == "1 0"
