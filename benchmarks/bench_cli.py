@@ -131,7 +131,8 @@ def baseline_cmd(poses, out) -> list:
 def child_cpu(cmd) -> tuple[float, str]:
     """CPU time (user + system) of one child process, and its stdout."""
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    res = subprocess.run(cmd, env=_env(), capture_output=True, text=True, cwd=ROOT)
+    # run in the timed tree: ``python -m`` puts the working directory before PYTHONPATH
+    res = subprocess.run(cmd, env=_env(), capture_output=True, text=True, cwd=TREE)
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     if res.returncode != 0:
         raise RuntimeError(f"{' '.join(cmd)} failed:\n{res.stderr[-3000:]}")
@@ -141,7 +142,7 @@ def child_cpu(cmd) -> tuple[float, str]:
 def import_time(cmd) -> float:
     """Seconds of imports as ``-X importtime`` counts them (the sum of the top-level imports)."""
     res = subprocess.run([cmd[0], "-X", "importtime", *cmd[1:]], env=_env(), capture_output=True, text=True,
-                         cwd=ROOT)
+                         cwd=TREE)
     total = 0
     for line in res.stderr.splitlines():
         if not line.startswith("import time:") or "[us]" in line:
