@@ -79,13 +79,14 @@ def _initialize_nrt(cache, target_context):
     from numba.core.runtime import _nrt_python, nrt, nrtdynmod
 
     rtsys = nrt.rtsys
+    if getattr(rtsys, "_init", False) is True:
+        return
+    codegen = target_context.codegen()
     if not (isinstance(getattr(rtsys, "_init", None), bool)
             and isinstance(getattr(type(rtsys), "library", None), property)
             and hasattr(nrtdynmod, "create_nrt_module") and isinstance(getattr(_nrt_python, "c_helpers", None), dict)
-            and isinstance(getattr(cache, "_cache_path", None), str)):
+            and isinstance(getattr(cache, "_cache_path", None), str) and _lazy_loading_possible(codegen)):
         rtsys.initialize(target_context)
-        return
-    if rtsys._init:
         return
     with global_compiler_lock:
         if rtsys._init:
@@ -95,7 +96,6 @@ def _initialize_nrt(cache, target_context):
         import llvmlite
         import llvmlite.binding as ll
 
-        codegen = target_context.codegen()
         key = (numba.__version__, llvmlite.__version__, codegen.magic_tuple(), config.MACHINE_BITS,
                config.DEBUG_NRT, config.DEBUG_NRT_STACK_LIMIT)
         path = os.path.join(cache._cache_path, f"splineimu-nrt.{sys.implementation.cache_tag}.nbo")
@@ -128,15 +128,20 @@ def _initialize_nrt(cache, target_context):
         rtsys._init = True
 
 
+def _lazy_loading_possible(codegen) -> bool:
+    """Whether numba's code generator has the parts :func:`_unserialize_lazily` uses."""
+    engine = getattr(codegen, "_engine", None)
+    return (all(hasattr(engine, a) for a in ("_defined_symbols", "_load_defined_symbols", "is_symbol_defined"))
+            and hasattr(getattr(codegen, "_library_class", None), "_unserialize"))
+
+
 def _load_cached(cache, sig, target_context):
     """``cache._load_overload`` with :func:`_unserialize_lazily` for the kernel's library."""
     from numba.core.funcdesc import FunctionDescriptor
 
     codegen = target_context.codegen()
-    engine = getattr(codegen, "_engine", None)
     if not (all(hasattr(cache, a) for a in ("_index_key", "_cache_file", "_impl", "_enabled"))
-            and all(hasattr(engine, a) for a in ("_defined_symbols", "_load_defined_symbols", "is_symbol_defined"))
-            and hasattr(getattr(codegen, "_library_class", None), "_unserialize")):
+            and _lazy_loading_possible(codegen)):
         return cache._load_overload(sig, target_context)
     if not cache._enabled:
         return None
