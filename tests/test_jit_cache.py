@@ -76,3 +76,64 @@ def test_lazy_loader_only_on_numba_function_caches():
     plain = numba.njit(cache=False)(lambda x: x)
     assert _jit._lazy_cache(plain) is plain
     assert not hasattr(plain._cache.load_overload, "func")
+
+
+
+LINK_KERNEL = KERNEL + """
+
+@jit
+def doubled(x):
+    out = np.empty(x.shape[0])
+    for i in range(x.shape[0]):
+        out[i] = 2.0 * x[i]
+    return out
+"""
+
+LINK_SCRIPT = """
+import sys
+import numba
+import numpy as np
+import linkkernel
+
+f = linkkernel.scaled_sum
+x = np.arange(5.0)
+print(f(x, 2.0), linkkernel.doubled(x).sum())
+cres = f.overloads[f.signatures[0]]
+lib = cres.library
+print("deferred" if "_shared_bitcode" in lib.__dict__ else "parsed")
+print("numba.np.arrayobj" in sys.modules)  # np.empty's environment came without its module
+from numba.core.runtime import nrt
+print("deferred" if "_shared_bitcode" in nrt.rtsys.library.__dict__ else "parsed")  # numba's runtime: cached
+# a kernel compiled after the loads (not cached) calls the loaded ones: their modules are linked in
+outer = numba.njit(lambda x: linkkernel.scaled_sum(x, 2.0) + linkkernel.doubled(x)[1] + np.empty(3).size)
+print(outer(x))
+print("deferred" if "_shared_bitcode" in lib.__dict__ else "parsed")
+# names the cached module defines beside the entry point are found (recorded on a miss)
+engine = lib.codegen._engine
+print(engine.is_symbol_defined(cres.fndesc.llvm_func_name), engine.is_symbol_defined("no_such_symbol"))
+print(sum(f._cache_hits.values()), sum(f._cache_misses.values()))
+"""
+
+
+def test_kernel_compiled_after_cache_loads_links_the_loaded_kernels(tmp_path):
+    (tmp_path / "linkkernel.py").write_text(LINK_KERNEL.replace("from splineimu", "import numpy as np\nfrom splineimu"))
+    e = {k: v for k, v in os.environ.items() if k != "SPLINEIMU_NUMBA_FULL_INIT"}
+    e.update(PYTHONPATH=os.pathsep.join([str(tmp_path), str(ROOT)]))
+
+    def run():
+        out = subprocess.run([sys.executable, "-c", LINK_SCRIPT], env=e, capture_output=True, text=True,
+                             cwd=tmp_path)
+        assert out.returncode == 0, out.stderr
+        return out.stdout.split("\n")
+
+    first = run()  # compiles (numba's runtime too) and fills the cache
+    assert first[1:4] == ["parsed", "True", "parsed"]
+    assert list(tmp_path.glob("__pycache__/splineimu-nrt.*.nbo"))
+    lines = run()
+    assert [float(v) for v in lines[0].split()] == [20.0, 20.0]
+    # loaded without parsing bitcode or importing arrayobj, numba's runtime from the cache
+    assert lines[1:4] == ["deferred", "False", "deferred"]
+    assert float(lines[4]) == pytest.approx(25.0, rel=0, abs=0)  # 20 + 2 + 3
+    assert lines[5] == "parsed"  # parsed for linking into the new kernel
+    assert lines[6] == "True False"
+    assert lines[7] == "1 0"

@@ -83,3 +83,52 @@ def test_derivative_matches_the_basis_derivative(r):
     Br = basis_values(k, s - seg, derivative=r) / dt_**r
     ref = np.einsum("mj,mjz->mz", Br, C[0][seg[:, None] + np.arange(k)])
     np.testing.assert_allclose(d, ref, rtol=1e-12, atol=1e-12 * np.abs(ref).max())
+
+
+def _reference_solve_folds(H, rhs, counts, pen, mu_dense, mu_sparse):
+    """solve_folds step by step: each fold's training system in full, its penalty rows in order,
+    then the fitting module's banded Cholesky solve."""
+    from splineimu._kernels.fit import band_cholesky_solve
+
+    nf, n, k = H.shape
+    nseg, L = counts.shape[1], len(pen)
+    Ht, rt = H[0].copy(), rhs[0].copy()
+    for g in range(1, nf):
+        Ht += H[g]
+        rt += rhs[g]
+    C = np.empty_like(rhs)
+    for f in range(nf):
+        Hf = Ht - H[f] if nf > 1 else Ht.copy()
+        Cf = rt - rhs[f] if nf > 1 else rt.copy()
+        train = counts.sum(axis=0) - counts[f] if nf > 1 else counts[0]
+        free = np.r_[0, np.cumsum(train == 0.0)]
+        per_ctrl = max(np.sum(Hf[:, 0]) / n, 1e-12)
+        if L <= k and n >= L:
+            for j in range(n - L + 1):
+                lo, hi = max(j - k + 1, 0), min(j + L - 1, nseg - 1)
+                mu = (mu_sparse if hi >= lo and free[hi + 1] > free[lo] else mu_dense) * per_ctrl
+                for a in range(L):
+                    for b in range(a, L):
+                        Hf[j + a, b - a] += mu * pen[a] * pen[b]
+        C[f] = Cf if band_cholesky_solve(Hf, Cf) else np.nan
+    return C
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_solve_folds_is_the_stepwise_solve_bitwise(seed):
+    # one pass over the rows (build, penalize, factor) against the passes it fuses: same bits,
+    # singular training systems (NaN) included
+    rng = np.random.default_rng(seed)
+    k, d, nf = int(rng.integers(4, 7)), int(rng.choice([3, 6])), int(rng.choice([1, 4]))
+    n = int(rng.integers(1, 40))
+    nseg = max(n - k + 1, 1)
+    H = rng.random((nf, n, k))
+    H[:, :, 0] += 3.0 * rng.random((nf, n)) - (2.0 if seed % 5 == 0 else 0.0)  # some indefinite
+    H[:, rng.integers(0, n, size=max(1, n // 3)), :] = 0.0  # rows without samples
+    rhs = rng.normal(size=(nf, n, d))
+    counts = (rng.random((nf, nseg)) < 0.6) * rng.integers(1, 4, size=(nf, nseg)).astype(float)
+    pen = knots._penalty(k)
+    C = np.full((nf, n, d), 5.0)
+    kcv.solve_folds(H, rhs, counts, pen, 1e-3, 1e-1, np.empty((n, k)), C, (0.0,) * k, (0.0,) * d)
+    ref = _reference_solve_folds(H, rhs, counts, pen, 1e-3, 1e-1)
+    assert C.tobytes() == ref.tobytes()

@@ -122,48 +122,6 @@ def pairwise_sum(a, lo, n):
 
 
 @jit
-def _band_cholesky_solve(A, B, kt, dt):
-    """:func:`.fit.band_cholesky_solve` (band width k) with each row's forward substitution
-    right after its factorization and the loop bounds hoisted: the same sums in the same order."""
-    n = A.shape[0]
-    w = len(kt)
-    m = len(dt)
-    for i in range(n):
-        for c in range(w):
-            if c >= n - i:
-                break
-            s = A[i, c]
-            for q in range(1, w - c):
-                if q > i:
-                    break
-                s -= A[i - q, q] * A[i - q, q + c]
-            if c == 0:
-                if not s > 0.0:
-                    return False
-                A[i, 0] = np.sqrt(s)
-            else:
-                A[i, c] = s / A[i, 0]
-        piv = A[i, 0]
-        for z in range(m):
-            s = B[i, z]
-            for q in range(1, w):
-                if q > i:
-                    break
-                s -= A[i - q, q] * B[i - q, z]
-            B[i, z] = s / piv
-    for i in range(n - 1, -1, -1):
-        piv = A[i, 0]
-        for z in range(m):
-            s = B[i, z]
-            for c in range(1, w):
-                if c > n - 1 - i:
-                    break
-                s -= A[i, c] * B[i + c, z]
-            B[i, z] = s / piv
-    return True
-
-
-@jit
 def solve_folds(H, rhs, counts, pen, mu_dense, mu_sparse, Hf, C, kt, dt):
     """Training fits of every fold: control points ``C`` (F, n, d) (NaN where singular).
 
@@ -171,6 +129,10 @@ def solve_folds(H, rhs, counts, pen, mu_dense, mu_sparse, Hf, C, kt, dt):
     the difference penalty of coefficients ``pen`` (a tuple of r + 1) with per-row weight ``mu_sparse``
     (rows touching a control point whose support has a training-free segment) or ``mu_dense``,
     times the mean diagonal. ``Hf`` (n, k) scratch.
+
+    One pass over the rows builds each row of the training system, adds the penalty rows that
+    reach it and factors it (:func:`_factor_row`) as soon as it is complete: the sums of
+    building the whole system, then :func:`.fit.band_cholesky_solve`, in their order.
     """
     nf = H.shape[0]
     n = H.shape[1]
@@ -178,30 +140,32 @@ def solve_folds(H, rhs, counts, pen, mu_dense, mu_sparse, Hf, C, kt, dt):
     d = len(dt)
     nseg = counts.shape[1]
     L = len(pen)
-    zero_segs = np.empty(nseg + 1, dtype=np.int64)  # training-free segments before each segment
+    penalize = L <= k and n >= L
     col = np.empty(n)
     prod = np.empty((2, L, L))
+    sparse = np.empty(n, dtype=np.int64)
     Ht = H[0].copy()
     rt = rhs[0].copy()
     for g in range(1, nf):
         Ht += H[g]
         rt += rhs[g]
-    for f in range(nf):
-        for i in range(n):
-            for c in range(k):
-                Hf[i, c] = Ht[i, c] - H[f, i, c] if nf > 1 else Ht[i, c]
-            col[i] = Hf[i, 0]
-            for z in range(d):
-                C[f, i, z] = rt[i, z] - rhs[f, i, z] if nf > 1 else rt[i, z]
-        zero_segs[0] = 0
+    # folds with samples in each segment (counts are sums of ones: a segment's training count
+    # is zero exactly when no fold but the held-out one has samples there)
+    nonzero = np.zeros(nseg, dtype=np.int64)
+    for g in range(nf):
         for j in range(nseg):
-            cnt = 0.0
-            for g in range(nf):
-                if g != f or nf == 1:
-                    cnt += counts[g, j]
-            zero_segs[j + 1] = zero_segs[j] + (1 if cnt == 0.0 else 0)
+            if counts[g, j] != 0.0:
+                nonzero[j] += 1
+    free = np.empty(nseg + 1, dtype=np.int64)  # training-free segments before each segment
+    for f in range(nf):
+        free[0] = 0
+        for j in range(nseg):
+            empty = nonzero[j] == 0 or (nf > 1 and nonzero[j] == 1 and counts[f, j] != 0.0)
+            free[j + 1] = free[j] + (1 if empty else 0)
+        for i in range(n):
+            col[i] = Ht[i, 0] - H[f, i, 0] if nf > 1 else Ht[i, 0]
         per_ctrl = max(pairwise_sum(col, 0, n) / n, 1e-12)
-        if L <= k and n >= L:
+        if penalize:
             # the two row weights' products mu pen[a] pen[b], rounded as each row would round them
             m0 = mu_dense * per_ctrl
             m1 = mu_sparse * per_ctrl
@@ -214,14 +178,116 @@ def solve_folds(H, rhs, counts, pen, mu_dense, mu_sparse, Hf, C, kt, dt):
                 # j + L - 1: sparse if one of those has no training samples
                 lo = max(j - k + 1, 0)
                 hi = min(j + L - 1, nseg - 1)
-                any_sparse = 1 if hi >= lo and zero_segs[hi + 1] > zero_segs[lo] else 0
-                for a in range(L):
-                    for b in range(a, L):
-                        Hf[j + a, b - a] += prod[any_sparse, a, b]
-        if not _band_cholesky_solve(Hf, C[f], kt, dt):
+                sparse[j] = 1 if hi >= lo and free[hi + 1] > free[lo] else 0
+        ok = True
+        Cf = C[f]
+        for i in range(n):
+            # row i of the training system, then the penalty rows j = i - L + 1 .. i that reach
+            # it, in that order (row j adds prod[a, a + c] at column c of its row j + a)
+            for c in range(k):
+                Hf[i, c] = Ht[i, c] - H[f, i, c] if nf > 1 else Ht[i, c]
+            for z in range(d):
+                Cf[i, z] = rt[i, z] - rhs[f, i, z] if nf > 1 else rt[i, z]
+            if penalize:
+                for a in range(L - 1, -1, -1):
+                    j = i - a
+                    if j >= 0 and j <= n - L:
+                        sp = sparse[j]
+                        for c in range(L - a):
+                            Hf[i, c] += prod[sp, a, a + c]
+            if ok:
+                if i >= k and i < n - k:
+                    ok = _factor_row_interior(Hf, Cf, i, kt, dt)
+                else:
+                    ok = _factor_row(Hf, Cf, i, kt, dt)
+        if ok:
+            _back_substitute(Hf, Cf, kt, dt)
+        else:
             for i in range(n):
                 for z in range(d):
-                    C[f, i, z] = np.nan
+                    Cf[i, z] = np.nan
+
+
+@jit(inline="always")
+def _factor_row(A, B, i, kt, dt):
+    """Row i of the banded Cholesky factorization of A (n, w) upper band (rows 0 .. i - 1
+    factored), then of the forward substitution of B (n, m); False if the pivot is not positive.
+    :func:`.fit.band_cholesky_solve`'s sums in its order."""
+    n = A.shape[0]
+    w = len(kt)
+    m = len(dt)
+    for c in range(w):
+        if c >= n - i:
+            break
+        s = A[i, c]
+        for q in range(1, w - c):
+            if q > i:
+                break
+            s -= A[i - q, q] * A[i - q, q + c]
+        if c == 0:
+            if not s > 0.0:
+                return False
+            A[i, 0] = np.sqrt(s)
+        else:
+            A[i, c] = s / A[i, 0]
+    piv = A[i, 0]
+    for z in range(m):
+        s = B[i, z]
+        for q in range(1, w):
+            if q > i:
+                break
+            s -= A[i - q, q] * B[i - q, z]
+        B[i, z] = s / piv
+    return True
+
+
+@jit(inline="always")
+def _factor_row_interior(A, B, i, kt, dt):
+    """:func:`_factor_row` of a row at least w from both ends: no bounds to check (10% faster)."""
+    w = len(kt)
+    m = len(dt)
+    for c in range(w):
+        s = A[i, c]
+        for q in range(1, w - c):
+            s -= A[i - q, q] * A[i - q, q + c]
+        if c == 0:
+            if not s > 0.0:
+                return False
+            A[i, 0] = np.sqrt(s)
+        else:
+            A[i, c] = s / A[i, 0]
+    piv = A[i, 0]
+    for z in range(m):
+        s = B[i, z]
+        for q in range(1, w):
+            s -= A[i - q, q] * B[i - q, z]
+        B[i, z] = s / piv
+    return True
+
+
+@jit(inline="always")
+def _back_substitute(A, B, kt, dt):
+    """The back substitution of the factored A (n, w) on B (n, m), as
+    :func:`.fit.band_cholesky_solve` sums it."""
+    n = A.shape[0]
+    w = len(kt)
+    m = len(dt)
+    for i in range(n - 1, -1, -1):
+        piv = A[i, 0]
+        if i < n - w:  # w - 1 rows below: no bound to check
+            for z in range(m):
+                s = B[i, z]
+                for c in range(1, w):
+                    s -= A[i, c] * B[i + c, z]
+                B[i, z] = s / piv
+        else:
+            for z in range(m):
+                s = B[i, z]
+                for c in range(1, w):
+                    if c > n - 1 - i:
+                        break
+                    s -= A[i, c] * B[i + c, z]
+                B[i, z] = s / piv
 
 
 @jit

@@ -134,13 +134,13 @@ def parse_stamps(strings, unit: str = "s", *, path=None, line_numbers=None):
         fast &= np.array([s.isascii() for s in strings])
     idx = np.flatnonzero(fast)
     if idx.size:
-        whole = ip[idx].astype(np.int64)
+        whole = _digits_value(ip[idx])
         if unit == "s":
             ok = whole <= _INT64_MAX // _NS_PER_S - 1  # no overflow in whole * 1e9 + frac
             fast[idx[~ok]] = False
             idx, whole = idx[ok], whole[ok]
             if idx.size:
-                frac = np.strings.ljust(fp[idx], 9, "0").astype(np.int64)
+                frac = _digits_value(fp[idx], width=9)  # the decimals, padded with zeros to ns
                 t_ns[idx] = whole * _NS_PER_S + frac
         else:
             t_ns[idx] = whole
@@ -151,6 +151,21 @@ def parse_stamps(strings, unit: str = "s", *, path=None, line_numbers=None):
         t_ns[i] = ns
         n_rounded += bool(rounded)
     return t_ns, n_rounded
+
+
+def _digits_value(a, width=None):
+    """int64 values of the strings of ASCII digits ``a`` (a numpy unicode array, at most 18
+    digits each), read from their code points (``astype(np.int64)``: 0.25 us a string); with
+    ``width``, each is first padded on the right with zeros to that many digits."""
+    n = a.size
+    w = a.dtype.itemsize // 4
+    codes = np.ascontiguousarray(a).view(np.uint32).reshape(n, w) if w else np.zeros((n, 0), np.uint32)
+    out = np.zeros(n, dtype=np.int64)
+    for i in range(w if width is None else width):
+        c = codes[:, i].astype(np.int64) if i < w else np.zeros(n, dtype=np.int64)
+        digit = c != 0  # numpy pads shorter strings with NUL
+        out = np.where(digit, out * 10 + (c - 48), out if width is None else out * 10)
+    return out
 
 
 # ----------------------------------------------------------------------------------------

@@ -160,7 +160,9 @@ class _Window:
     def _scratch(self, name, shape, dtype=np.float64, zero=False):
         """A work array reused from call to call (valid until the next call with that name):
         fresh large arrays would cost page faults at every fit."""
-        size = int(np.prod(shape))
+        size = 1
+        for m in shape:  # (np.prod: 5 us a call, 900 calls a choice)
+            size *= m
         buf = self._buffers.get(name)
         if buf is None or buf.size < size:
             buf = self._buffers[name] = np.empty(size + size // 4, dtype=dtype)
