@@ -246,12 +246,13 @@ def test_predicted_accel_counts_gravity_tilted_by_the_orientation_error():
     assert 0.6 <= ratio <= 1.6, (rep.predicted_accel_rms_m_s2, measured)
 
 
-def test_fast_smooth_rotation_is_not_held_at_sixty_degrees_per_knot():
+def test_fast_smooth_rotation_walks_to_its_turn_limit():
     """The flips scene turns at up to 17.6 rad/s; with AR(1) 30 ms pose noise its gyro is best
-    at 70-80 ms knots, 70-80 degrees per spacing. The cross-validation grid stops at 60
-    degrees (55 ms) and the walk used to stop at WALK_MAX_S: 43.5 ms knots and 1.6x the best
-    fixed gyro error (measured; now 68 ms, 1.08x)."""
+    at 70-80 ms knots, beyond the 60-degree turn limit (55 ms). The rotation's walk is not held
+    at WALK_MAX_S (50 ms, a limit for the position): 43.5 -> 54.2 ms, gyro 1.6x -> 1.35x the
+    best fixed setting (measured; the limit keeps the rest, see knots.py step 5)."""
     from splineimu.scenes import make_scene
+    from splineimu.spline.knots import WALK_MAX_S
     from splineimu.spline.signals import max_rotation_spacing
 
     dur = 20.0
@@ -270,5 +271,15 @@ def test_fast_smooth_rotation_is_not_held_at_sixty_degrees_per_knot():
 
     spl, rep = fit(t, p, q, return_report=True)
     best = min(gyro_err(fit(t, p, q, order=6, knot_spacing_s=dt, reject_outliers=False)) for dt in (0.055, 0.07, 0.08))
-    assert rep.knot_spacing_s > max_rotation_spacing(t, R), rep.knot_spacing_s
-    assert gyro_err(spl) <= 1.3 * best, (gyro_err(spl), best)
+    assert WALK_MAX_S < rep.knot_spacing_s <= max_rotation_spacing(t, R) * (1 + 1e-9), rep.knot_spacing_s
+    assert rep.converged
+    assert gyro_err(spl) <= 1.45 * best, (gyro_err(spl), best)
+
+
+def test_a_fit_that_does_not_converge_says_so():
+    t, p, q = poses("white", 10.0)
+    _, rep = fit(t, p, q, order=6, knot_spacing_s=0.05, max_iter=1, return_report=True)
+    assert not rep.converged
+    assert [w.code for w in rep.warnings] == ["fit_not_converged"], [w.message for w in rep.warnings]
+    _, rep = fit(t, p, q, order=6, knot_spacing_s=0.05, return_report=True)
+    assert rep.converged and not rep.warnings

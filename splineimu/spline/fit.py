@@ -46,7 +46,7 @@ from .basis import blending_matrix
 from .checks import check_rotation_steps, classify_residuals, dropped_warning, input_warnings
 from .core import KINDS, Spline
 from .knots import choose_knot_spacing, prediction_warnings
-from .report import FitReport
+from .report import FitReport, FitWarning
 
 #: Gauss-Newton stops when the largest update is below this (rad, or m for SE3 translation)
 GN_STEP_TOL = 1e-9
@@ -516,6 +516,10 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
     pred_a = choice["predicted_accel_rms_m_s2"] if choice else None
     warnings = (prediction_warnings(choice, t) + gap_warnings + warnings
                 + input_warnings(t, P, theta, res_pos, res_rot, keep, choice))
+    if not conv:
+        warnings.append(FitWarning("fit_not_converged", f"the rotation fit stopped after {iters} iterations without "
+                                   "converging: the spline may not be the least-squares one (raise max_iter, or "
+                                   "check the residuals and the knot spacing)"))
     report = FitReport(
         kind=kind, order=r_order, knot_spacing_s=lay_r[1], knot_spacing_source=source, n_poses=int(t.size),
         n_control=lay_r[3], span_s=(float(t[0]), float(t[-1])),

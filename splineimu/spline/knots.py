@@ -53,11 +53,13 @@ Method
    Nyquist frequency: the top of the band holds motion, not noise, :func:`motion_limited`) is
    searched at finer spacings, down to below the pose spacing, with a tenth of the surrogate;
    its ladder is walked only toward finer spacings, down to half the grid's floor.
-5. The rotation's cross-validation grid ends where the input turns by 60 degrees per spacing
-   (:func:`max_rotation_spacing`; control rotations much further apart cannot be told from
-   the opposite turn); its error ladder may go on to 90 degrees. Fast smooth rotation (the
-   flips scene, 17 rad/s) is best at 60-75 degrees: capped at 60, its gyro error was 1.33x the
-   best fixed setting under AR(1) and upsampled noise (now 1.08-1.10x).
+5. The rotation spacing never exceeds the time in which the input turns by 60 degrees
+   (:func:`max_rotation_spacing`): control rotations further apart cannot be told from the
+   opposite turn. Fast smooth rotation can be best beyond it (the flips scene, 17 rad/s, with
+   AR(1) or upsampled noise: 70-80 ms, 70-80 degrees; held at 55 ms its gyro error is 1.33x
+   the best fixed setting). A 90-degree limit reached 1.08x there, but the end control
+   rotations, which extrapolate the turn, then made the fit of a 50 s stretch of the same
+   scene stop at its iteration limit: kept at 60.
 
 Cost: per (order, spacing) one pass over the poses for the normal equations of all folds,
 banded Cholesky solves of the control-point size and one pass for the predictions, each one
@@ -98,7 +100,7 @@ from .._kernels import cv as _kcv
 from .banded import DEFAULT_SMOOTHNESS, SPARSE_SMOOTHNESS, difference_coefficients, layout
 from .basis import blending_matrix
 from .report import WARN_ACCEL_M_S2, WARN_GYRO_RAD_S, FitWarning
-from .signals import LADDER_TURN_RAD, accumulate, max_rotation_spacing, rotation_increments
+from .signals import accumulate, max_rotation_spacing, rotation_increments
 
 ORDERS = (4, 5, 6)
 N_FOLDS = 4
@@ -121,7 +123,7 @@ _WALK_RUNGS = 8
 #: second keep motion up to 10 Hz, the band the synthesized IMU must reproduce (the walk trusts
 #: a bias estimate that lags the true bias once the spacing cuts into the motion). The
 #: rotation's gyro prediction holds (0.8-1.35x the real noise on BROAD, 0.9-1.05x on analytic
-#: scenes): it walks on to its turn limit.
+#: scenes): it walks on to its turn limit (step 5).
 WALK_MAX_S = 0.05
 #: Standard gravity [m/s^2], for the accelerometer error an orientation error causes.
 GRAVITY_M_S2 = 9.81
@@ -428,7 +430,7 @@ def _walk_ladder(windows, k, ladder, noises, r, lo, hi):
     return ladder, var, bias2, ends
 
 
-def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, increments=False, dt_ladder_max=None):
+def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, increments=False):
     """Order and spacing (at most ``dt_max``) for an ordinary B-spline fit of signal X (N, 3)
     (or, with ``increments``, of the sums of X (N - 1, 3)) whose r-th derivative matters;
     returns a dict (see :func:`choose_knot_spacing`)."""
@@ -438,8 +440,6 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
     span = min(wd.t[-1] - wd.t[0] for wd in windows)
     lo = 0.7 * h
     hi = max(min(span / 4.0, 2.0, dt_max), lo * 1.01)
-    # the error ladder may go beyond the grid's top (up to dt_ladder_max)
-    hi_l = hi if dt_ladder_max is None else max(min(span / 4.0, 2.0, dt_ladder_max), hi)
     lo = min(lo, hi / 1.01)
     if dt_fixed is None:
         grid = np.geomspace(lo, hi, max(int(np.ceil(np.log(hi / lo) / np.log(_STEP))) + 1, 2))
@@ -484,12 +484,12 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
         # (toward interpolation); the rung below the first one kept is its reference
         lo_k = lo * (0.5 if limited else 1.0)
         # no position rung beyond WALK_MAX_S either, unless the value-optimal spacing is beyond it
-        hi_k = min(hi_l, WALK_MAX_S) if dt_fixed is None and dt_cv < WALK_MAX_S and r == 2 else hi_l
+        hi_k = min(hi, WALK_MAX_S) if dt_fixed is None and dt_cv < WALK_MAX_S and r == 2 else hi
         ok = (ladder >= lo_k * 0.99) & (ladder <= hi_k * (1.0 + 1e-9))
         first = max(int(np.argmax(ok)) - 1, 0)
         ladder = np.r_[ladder[first], ladder[first + 1:][ok[first + 1:]]]
         if dt_fixed is None:
-            top = ladder[-1] if limited else max(ladder[-1], min(hi_l, WALK_MAX_S) if r == 2 else hi_l)
+            top = ladder[-1] if limited else max(ladder[-1], min(hi, WALK_MAX_S) if r == 2 else hi)
             ladder, var, bias2, ends = _walk_ladder(windows, k, ladder, noises, r, lo_k, top)
         else:
             var, bias2, ends = _ladder_errors(windows, k, ladder, noises, r)
@@ -559,7 +559,7 @@ def choose_knot_spacing(t, P, R, w=None, rotation_order="auto", position_order="
     ro = ORDERS if rotation_order == "auto" else (int(rotation_order),)
     po = ORDERS if position_order == "auto" else (int(position_order),)
     rot = choose_signal(t, rotation_increments(R), w, 1, ro, rotation_dt, max_rotation_spacing(t, R),
-                        increments=True, dt_ladder_max=max_rotation_spacing(t, R, LADDER_TURN_RAD))
+                        increments=True)
     pos = choose_signal(t, np.ascontiguousarray(P), w, 2, po, position_dt)
     # an orientation error dtheta (isotropic) turns the specific force f by f x dtheta: RMS
     # sqrt(2/3) |f| |dtheta|, with |f| ~ g (slow motion, where it is the accelerometer's main error)

@@ -11,14 +11,11 @@ from .. import lie
 #: The rotation spline's neighbouring control rotations may turn by at most this at the
 #: input's fastest rate (increments are taken as the shortest turn, below pi).
 MAX_CONTROL_TURN_RAD = np.pi / 3
-#: The knot choice's error ladder may look at rotation spacings up to this turn (the fitted
-#: increments stay well within pi; fast smooth rotation is best at 60-75 degrees per spacing).
-LADDER_TURN_RAD = np.pi / 2
 
 
-def max_rotation_spacing(t, R, max_turn=MAX_CONTROL_TURN_RAD):
-    """Largest rotation knot spacing over which the input turns by at most ``max_turn``
-    (default :data:`MAX_CONTROL_TURN_RAD`) anywhere (neighbouring control rotations must stay well within
+def max_rotation_spacing(t, R):
+    """Largest rotation knot spacing over which the input turns by at most
+    :data:`MAX_CONTROL_TURN_RAD` anywhere (neighbouring control rotations must stay well within
     the shortest-turn range of their increments). Angles are measured over the spacing itself,
     so pose noise does not shrink the limit."""
     n = t.size
@@ -36,10 +33,10 @@ def max_rotation_spacing(t, R, max_turn=MAX_CONTROL_TURN_RAD):
             return True
         tr = np.einsum("ij,ij->i", Rf[:-m], Rf[m:])
         ang = float(np.arccos(np.clip((np.min(tr[ok]) - 1.0) / 2.0, -1.0, 1.0)))
-        if abs(ang - max_turn) < 1e-6:
+        if abs(ang - MAX_CONTROL_TURN_RAD) < 1e-6:
             ang = float(np.max(np.linalg.norm(lie.so3_log(np.matmul(np.swapaxes(R[:-m][ok], 1, 2), R[m:][ok])),
                                               axis=1)))
-        return ang <= max_turn
+        return ang <= MAX_CONTROL_TURN_RAD
 
     if n < 2 or not within(1):
         return 0.7 * h
