@@ -62,8 +62,27 @@ def _load_lazily(cache, sig, target_context):
         _initialize_nrt(cache, target_context)
         cres = _load_cached(cache, sig, target_context)
     if cres is None:
+        _announce_compiling()
         return type(cache).load_overload(cache, sig, target_context)
     return cres
+
+
+_ANNOUNCED = []
+
+
+def _announce_compiling():
+    """One line on a terminal's stderr before the first kernel a process compiles (a first run
+    after installing spends 40-50 s there, silent otherwise); nothing when stderr is a file or
+    a pipe, whose readers (scripts, tests) expect only the command's own output."""
+    if _ANNOUNCED:
+        return
+    _ANNOUNCED.append(True)
+    try:
+        if sys.stderr is not None and sys.stderr.isatty():
+            print("splineimu: compiling numerical kernels for this machine (once after installing; "
+                  "later runs load them from the cache) ...", file=sys.stderr, flush=True)
+    except (AttributeError, ValueError, OSError):
+        pass
 
 
 def _initialize_nrt(cache, target_context):

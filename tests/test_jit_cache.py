@@ -137,3 +137,20 @@ def test_kernel_compiled_after_cache_loads_links_the_loaded_kernels(tmp_path):
     assert lines[5] == "parsed"  # parsed for linking into the new kernel
     assert lines[6] == "True False"
     assert lines[7] == "1 0"
+
+
+def test_first_compile_is_announced_once_on_a_terminal_only(monkeypatch):
+    import io
+
+    from splineimu import _jit
+
+    class Tty(io.StringIO):
+        def isatty(self):
+            return True
+
+    for stream, lines in ((io.StringIO(), 0), (Tty(), 1)):
+        monkeypatch.setattr(_jit, "_ANNOUNCED", [])
+        monkeypatch.setattr("sys.stderr", stream)
+        _jit._announce_compiling()
+        _jit._announce_compiling()
+        assert stream.getvalue().count("compiling numerical kernels") == lines, stream.getvalue()
