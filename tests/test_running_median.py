@@ -24,8 +24,15 @@ def test_kernel_equals_median_filter(n, size):
 def test_checks_running_median_both_paths(monkeypatch):
     rng = np.random.default_rng(3)
     x = np.abs(rng.standard_cauchy(5000))
-    want = median_filter(x, size=201, mode="nearest")
+    want = median_filter(x, size=201, mode="mirror")  # the ends mirrored
     np.testing.assert_array_equal(checks._running_median(x, 200.7), want)  # width -> odd size 201
     monkeypatch.setattr(checks, "KERNEL_MEDIAN_MAX_WORK", 0)  # long inputs: scipy's
     np.testing.assert_array_equal(checks._running_median(x, 200.7), want)
-    assert checks._running_median(np.arange(4.0), 1.0).tolist() == [0.0, 1.0, 2.0, 3.0]  # size at least 3
+    assert checks._running_median(np.arange(4.0), 1.0).tolist() == [1.0, 1.0, 2.0, 2.0]  # size at least 3, mirrored
+
+
+def test_the_local_level_at_the_ends_is_not_the_end_value():
+    """A small first residual must not set the level of the first half window."""
+    x = np.ones(1001)
+    x[0] = 1e-3
+    assert checks._running_median(x, 201.0)[:100].min() == 1.0

@@ -84,18 +84,27 @@ KERNEL_MEDIAN_MAX_WORK = 2e7
 
 
 def _running_median(x, width):
-    """scipy.ndimage ``median_filter(x, size, mode="nearest")`` with an odd ``size`` near ``width``."""
+    """scipy.ndimage ``median_filter(x, size, mode="mirror")`` with an odd ``size`` near ``width``.
+
+    The ends are mirrored, not extended with their first and last values: the spline follows
+    the end poses closely, and half a window of copies of the first residual set the local
+    level near the start (10 kHz poses, 1 s window: 0.37x the level elsewhere, and valid poses
+    8 sigmas above it were dropped as glitches)."""
     size = max(int(width) | 1, 3)
     x = np.ascontiguousarray(x, dtype=np.float64)
-    if x.size * size > KERNEL_MEDIAN_MAX_WORK:
+    if x.size < 2:
+        return x.copy()
+    h = size // 2
+    xp = np.pad(x, h, mode="reflect")
+    if xp.size * size > KERNEL_MEDIAN_MAX_WORK:
         from scipy.ndimage import median_filter
 
-        return median_filter(x, size=size, mode="nearest")
+        return median_filter(xp, size=size, mode="nearest")[h:h + x.size]
     from .._kernels.median import running_median
 
-    out = np.empty_like(x)
-    running_median(x, size, out)
-    return out
+    out = np.empty_like(xp)
+    running_median(xp, size, out)
+    return out[h:h + x.size]
 
 
 def _extrapolation_errors(t, Y):
