@@ -472,7 +472,7 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
     if progress:
         from tqdm import tqdm
 
-        bar = tqdm(total=max_iter, desc="fit", unit="it", leave=False)
+        bar = tqdm(desc="fit (Gauss-Newton)", unit="it", leave=False)  # 4-6 iterations typically, up to max_iter
 
     def tick(_it):
         if bar is not None:
