@@ -64,14 +64,14 @@ Method
 Cost: per (order, spacing) one pass over the poses for the normal equations of all folds,
 banded Cholesky solves of the control-point size and one pass for the predictions, each one
 kernel call (:mod:`splineimu._kernels.cv`, compiled per order, work arrays reused); about 60
-cross-validated and 30 ladder fits per choice. The grid is scored coarse to fine and stops
+cross-validated and 35 ladder fits per choice. The grid is scored coarse to fine and stops
 before its finest spacings (the costliest fits, more control points than poses) once two in a
 row score worse than their coarser neighbour and 3x the best. Inputs longer than
 :data:`MAX_CV_POSES` are cross-validated on evenly spread windows (the spacing is a local
 property), so the choice costs the same for a minute and for an hour. Measured (12k poses,
-benchmarks/bench_knots.py): ~1.6x scipy's interpolation of the same poses, a third of what it
-was; the kernels sum in the order of the fitting kernels and of numpy, so the choices are those
-of the implementation they replaced (its reported figures to 1e-13 on noisy and real poses, to
+benchmarks/bench_knots.py): ~1.75x scipy's interpolation of the same poses (load ~1); the
+kernels sum in the order of the fitting kernels and of numpy, so the choices are those of the
+implementation they replaced (its reported figures to 1e-13 on noisy and real poses, to
 1e-9 on exact poses, whose scores are rounding noise). Going further means fewer fits
 (candidates from tabulated transfer functions), which moves the flat cross-validation optima by
 a grid step.
