@@ -475,6 +475,18 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
         noises = [0.1 * nz for nz in noises]
     rows = []
     best = None
+
+    def consider(k, dts, var, bias2, ends, dt_cv):
+        nonlocal best  # candidates (order k, spacings dts with their errors) into rows and best
+        pred = np.sqrt(var + bias2)
+        for j, dt in enumerate(dts):
+            rows.append({"order": k, "knot_spacing_s": float(dt), "predicted_rms": float(pred[j]),
+                         "predicted_noise_rms": float(np.sqrt(var[j])), "cv_knot_spacing_s": float(dt_cv)})
+            if best is None or pred[j] < best[0]:
+                best = (float(pred[j]), k, float(dt), float(var[j]), ends[j], float(dt_cv))
+
+    # the position's walk stops at WALK_MAX_S (its bias estimate lags); the rotation's goes on
+    walk_cap = WALK_MAX_S if r == 2 else np.inf
     ladders = {}
     for k in orders:
         dt_cv = min((v, dt) for (kk, dt), v in table.items() if kk == k)[1]
@@ -483,39 +495,28 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
         # motion-limited input is walked only toward finer spacings, and may go below the grid
         # (toward interpolation); the rung below the first one kept is its reference
         lo_k = lo * (0.5 if limited else 1.0)
-        # no position rung beyond WALK_MAX_S either, unless the value-optimal spacing is beyond it
-        hi_k = min(hi, WALK_MAX_S) if dt_fixed is None and dt_cv < WALK_MAX_S and r == 2 else hi
+        # no rung beyond the walk's cap either, unless the value-optimal spacing is beyond it
+        hi_k = min(hi, walk_cap) if dt_fixed is None and dt_cv < walk_cap else hi
         ok = (ladder >= lo_k * 0.99) & (ladder <= hi_k * (1.0 + 1e-9))
         first = max(int(np.argmax(ok)) - 1, 0)
         ladder = np.r_[ladder[first], ladder[first + 1:][ok[first + 1:]]]
         if dt_fixed is None:
-            top = ladder[-1] if limited else max(ladder[-1], min(hi, WALK_MAX_S) if r == 2 else hi)
+            top = ladder[-1] if limited else max(ladder[-1], min(hi, walk_cap))
             ladder, var, bias2, ends = _walk_ladder(windows, k, ladder, noises, r, lo_k, top)
         else:
             var, bias2, ends = _ladder_errors(windows, k, ladder, noises, r)
-        pred = np.sqrt(var + bias2)
         ladders[k] = ladder
-        for j, dt in enumerate(ladder[1:]):
-            rows.append({"order": k, "knot_spacing_s": float(dt), "predicted_rms": float(pred[j]),
-                         "predicted_noise_rms": float(np.sqrt(var[j])), "cv_knot_spacing_s": float(dt_cv)})
-            if best is None or pred[j] < best[0]:
-                best = (float(pred[j]), k, float(dt), float(var[j]), ends[j], float(dt_cv))
+        consider(k, ladder[1:], var, bias2, ends, dt_cv)
     if best is None:
         raise ValueError("no knot spacing could be evaluated (too few poses for the orders?)")
     if dt_fixed is None and r == 2:
-        # half a rung either side of the best (each against its own rung below, as on the
-        # ladder): near a steep rise of the bias the error changes by 20-30% per rung
+        # half a rung either side of the best, within the rungs tried (each against its own rung
+        # below): near a steep rise of the bias the error changes by 20-30% per rung
         k, dt, dt_cv = best[1], best[2], best[5]
         half = dt * _LADDER ** np.array([-1.5, -0.5, 0.5])
         var, bias2, ends = _ladder_errors(windows, k, half, noises, r)
-        pred = np.sqrt(var + bias2)
-        for j, h_dt in enumerate(half[1:]):
-            if not ladders[k][1] * 0.999 <= h_dt <= ladders[k][-1] * 1.001:
-                continue
-            rows.append({"order": k, "knot_spacing_s": float(h_dt), "predicted_rms": float(pred[j]),
-                         "predicted_noise_rms": float(np.sqrt(var[j])), "cv_knot_spacing_s": float(dt_cv)})
-            if pred[j] < best[0]:
-                best = (float(pred[j]), k, float(h_dt), float(var[j]), ends[j], float(dt_cv))
+        inside = (half[1:] >= ladders[k][1] * 0.999) & (half[1:] <= ladders[k][-1] * 1.001)
+        consider(k, half[1:][inside], var[inside], bias2[inside], [e for e, i in zip(ends, inside) if i], dt_cv)
     pred, k, dt, var, ends, dt_cv = best
     # the first and last k knot spacings see one-sided data: their noise part on its own
     zone = k * dt
@@ -523,16 +524,18 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
     head = t_a <= t_a[0] + zone
     tail = t_b >= t_b[-1] - zone
     end_rms = float(np.sqrt(max(np.mean(e_a[head]), np.mean(e_b[tail])) + pred**2 - var))
-    # the rotation's own (value) error at the choice: it tilts gravity into the accelerometer
-    v0, b0, _ = _ladder_errors(windows, k, np.array([dt / _LADDER, dt]), noises, 0) if r == 1 else ([0.0], [0.0], 0)
-    return {
-        "value_rms": float(np.sqrt(v0[0] + b0[0])),
+    out = {
         "order": k, "knot_spacing_s": dt, "cv_knot_spacing_s": dt_cv,
         "block_poses": int(block), "noise_correlation_poses": int(lag), "motion_limited": bool(limited),
         "predicted_rms": pred, "predicted_noise_rms": float(np.sqrt(var)),
         "cv_rms": float(np.sqrt(table[(k, dt_cv)])), "end_zone_s": float(zone), "end_predicted_rms": end_rms,
         "candidates": rows,
     }
+    if r == 1:
+        # the rotation's own (value) error at the choice: it tilts gravity into the accelerometer
+        v0, b0, _ = _ladder_errors(windows, k, np.array([dt / _LADDER, dt]), noises, 0)
+        out["value_rms"] = float(np.sqrt(v0[0] + b0[0]))
+    return out
 
 
 def choose_knot_spacing(t, P, R, w=None, rotation_order="auto", position_order="auto",
