@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import require_shared
 
 from splineimu import Spline, SplineImuError, fit, lie
 from splineimu._kernels import fit as _kf
@@ -212,3 +213,17 @@ def test_fit_rejects_bad_input():
         fit(t, p, np.zeros_like(q))
     with pytest.raises(SplineImuError, match="too few poses"):
         fit(t[:1], p[:1], q[:1])
+
+
+def test_control_rotations_beyond_the_data_do_not_stall_the_fit():
+    """OpenVINS's udel_garage trajectory (10 Hz, the last pose turns 3.4 degrees after 2 s of
+    0.05-degree steps): order 6 at 169 ms knots, whose outer control rotations the data weigh by
+    1/120 at most. Without a prior on them Gauss-Newton stepped 6 rad on the last one and stopped
+    unconverged after 143 iterations; with it: 4 iterations, measured."""
+    from splineimu.io.tum import read_tum
+
+    tr = read_tum(require_shared("openvins_sim", "udel_garage.txt"))
+    t = (tr.t_ns - tr.t_ns[0]) * 1e-9
+    _, rep = fit(t, tr.positions, tr.quat_xyzw, order=6, knot_spacing_s=0.16945, return_report=True)
+    assert rep.converged and rep.iterations <= 8, rep.iterations
+    assert "fit_not_converged" not in [w.code for w in rep.warnings]
