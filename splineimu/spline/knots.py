@@ -53,13 +53,12 @@ Method
    Nyquist frequency: the top of the band holds motion, not noise, :func:`motion_limited`) is
    searched at finer spacings, down to below the pose spacing, with a tenth of the surrogate;
    its ladder is walked only toward finer spacings, down to half the grid's floor.
-5. The rotation spacing never exceeds the time in which the input turns by 60 degrees
-   (:func:`max_rotation_spacing`): control rotations further apart cannot be told from the
-   opposite turn. Fast smooth rotation can be best beyond it (the flips scene, 17 rad/s, with
-   AR(1) or upsampled noise: 70-80 ms, 70-80 degrees; held at 55 ms its gyro error is 1.33x
-   the best fixed setting). A 90-degree limit reached 1.08x there, but the end control
-   rotations, which extrapolate the turn, then made the fit of a 50 s stretch of the same
-   scene stop at its iteration limit: kept at 60.
+5. The rotation spacing never exceeds the time in which the input turns by 90 degrees
+   (:func:`max_rotation_spacing`): further apart, neighbouring control rotations near the
+   opposite turn. Fast smooth rotation is best close to it (the flips scene, 17 rad/s, AR(1)
+   or upsampled noise: 70-80 ms, 70-80 degrees; a 60-degree limit held it at 55 ms, gyro 1.33x
+   the best fixed setting, now 1.01-1.15x). The control rotations beyond the data extrapolate
+   the turn; the fit's prior on them keeps Gauss-Newton converging (``END_TURN_SIGMA_RAD``).
 
 Cost: per (order, spacing) one pass over the poses for the normal equations of all folds,
 banded Cholesky solves of the control-point size and one pass for the predictions, each one

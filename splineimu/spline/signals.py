@@ -9,8 +9,9 @@ import numpy as np
 from .. import lie
 
 #: The rotation spline's neighbouring control rotations may turn by at most this at the
-#: input's fastest rate (increments are taken as the shortest turn, below pi).
-MAX_CONTROL_TURN_RAD = np.pi / 3
+#: input's fastest rate (increments are taken as the shortest turn, below pi; 60 degrees cost
+#: fast smooth rotation a third more gyro error, see knots.py step 5).
+MAX_CONTROL_TURN_RAD = np.pi / 2
 
 
 def max_rotation_spacing(t, R):
