@@ -314,6 +314,7 @@ def _noise_spectrum(wd, k, dt_cv, rng):
     white = rng.normal(size=wd.X.shape)
     both = np.ascontiguousarray(np.hstack([wd.X, white]))
     res = both - wd.derivative(k, dt_cv, wd.zero, 1, 0, both)[0]
+    res[wd.w <= 0] = 0.0  # poses left out (dropped glitches) are neither noise nor motion
     res -= res.mean(axis=0)
     n = res.shape[0]
     width = max(8, (n // 2) // 256)
