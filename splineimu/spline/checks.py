@@ -124,6 +124,27 @@ def _extrapolation_errors(t, Y):
     return fwd, bwd
 
 
+def _inner_glitch(t, Y, e, fwd, bwd, jmin, a, b):
+    """(first, last) pose of a glitch inside the run [a, b) of large residuals ``e``, or None: a
+    jump in before the largest residual and a jump out after it (as large as half of it and as
+    the local jump level ``jmin``), by the same offset (the poses between moved together:
+    their forward and backward extrapolation errors agree within half their size)."""
+    top = float(e[a:b].max())
+    peak = a + int(np.argmax(e[a:b]))
+    ins = a + np.flatnonzero(fwd[a:peak + 1] > np.maximum(0.5 * top, jmin[a:peak + 1]))
+    outs = peak + np.flatnonzero(bwd[peak:b] > np.maximum(0.5 * top, jmin[peak:b]))
+    if not (ins.size and outs.size) or ins[0] < 2 or outs[-1] > t.size - 3:
+        return None
+    i, k = int(ins[0]), int(outs[-1])
+    r = (t[i] - t[i - 1]) / (t[i - 1] - t[i - 2])
+    jump_in = Y[i] - Y[i - 1] - r * (Y[i - 1] - Y[i - 2])
+    r = (t[k + 1] - t[k]) / (t[k + 2] - t[k + 1])
+    jump_out = Y[k] - Y[k + 1] - r * (Y[k + 1] - Y[k + 2])
+    if np.linalg.norm(jump_in - jump_out) > 0.5 * min(np.linalg.norm(jump_in), np.linalg.norm(jump_out)):
+        return None
+    return i, k
+
+
 def _runs(mask, bridge=2):
     """(start, stop) index pairs of runs of True, joining runs separated by <= bridge Falses."""
     idx = np.flatnonzero(mask)
@@ -162,12 +183,21 @@ def classify_residuals(t, P, theta, res_pos, res_rot, w):
     for a, b in _runs(cand):
         t0, t1 = float(t[a]), float(t[b - 1])
         jin = jout = inside = big = False
-        for e, fwd, bwd, jmin, warn in parts:
+        core = None  # (first, last) pose of a glitch whose jumps lie inside the run
+        for (e, fwd, bwd, jmin, warn), Y in zip(parts, (P, theta)):
             top = float(e[a:b].max())
             jin |= a == 0 or bool(fwd[a] > max(0.5 * top, jmin[a]))
             jout |= b == n or bool(bwd[b - 1] > max(0.5 * top, jmin[b - 1]))
             inside |= bool(np.any(fwd[a:b + 1] > np.maximum(0.25 * top, jmin[a:b + 1])))
             big |= top >= warn
+            if core is None and 0 < a and b < n and top >= warn:
+                core = _inner_glitch(t, Y, e, fwd, bwd, jmin, a, b)
+        if not (jin and jout) and core is not None:
+            # the fit spread a large glitch's residual onto valid neighbours (fast motion, short
+            # knots), which joined the run: drop the poses between the jumps only (below the
+            # warning level such runs on BROAD's mocap, 0.1-0.4 degrees, were as often motion)
+            (a, b), jin, jout = (core[0], core[1] + 1), True, True
+            t0, t1 = float(t[a]), float(t[b - 1])
         if jin and jout and (t1 - t0) <= MAX_GLITCH_S and (b - a) < 0.5 * n:
             drop[a:b] = cand[a:b] | (score[a:b] > 0.5)
         elif not big:

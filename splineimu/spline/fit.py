@@ -418,8 +418,9 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
         (``fit_not_converged``).
     reject_outliers : bool
         After the first fit, drop runs of poses that jump away from the motion and back
-        (tracking glitches, :mod:`splineimu.spline.checks`) and fit again; the report lists
-        them (``dropped_poses``) and warns.
+        (tracking glitches, :mod:`splineimu.spline.checks`) and fit again, the automatic
+        knot choice made again without them; the report lists them (``dropped_poses``) and
+        warns.
     progress : bool
         Show a progress bar for long fits.
     return_report : bool
@@ -464,23 +465,28 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
     if t.size < 2:
         raise InputError(f"too few poses to fit: got {t.size}, need at least 2")
     gap_warnings = check_rotation_steps(t, R)
-    choice = None
-    if "auto" in (r_order, r_dt, p_order, p_dt):
-        choice = choose_knot_spacing(t, P, R, w, r_order, p_order, None if r_dt == "auto" else r_dt,
-                                     None if p_dt == "auto" else p_dt)
-        r_order, r_dt = choice["rotation"]["order"], choice["rotation"]["knot_spacing_s"]
-        p_order, p_dt = choice["position"]["order"], choice["position"]["knot_spacing_s"]
+    given = (r_order, r_dt, p_order, p_dt)
     source = "auto" if isinstance(knot_spacing_s, str) else "given"
-    if kind == "se3":
-        # one grid: the finer spacing, the position's order (the accelerometer's)
-        r_dt = p_dt = min(r_dt, p_dt)
-        r_order = p_order = max(r_order, p_order)
-    sig_p = sig_r = 1e-3
-    if choice is not None:
-        sig_p = max(choice["position"]["cv_rms"] / np.sqrt(3.0), 1e-6)
-        sig_r = max(choice["rotation"]["cv_rms"] / np.sqrt(3.0), 1e-6)
-    lay_r = layout(t[0], t[-1], r_dt, r_order)
-    lay_p = layout(t[0], t[-1], p_dt, p_order)
+
+    def settings(wts):
+        """The knot choice (None if all is given), the (order, layout) of rotation and position,
+        and the noise levels that weigh them."""
+        ro, rdt, po, pdt = given
+        ch = None
+        if "auto" in given:
+            ch = choose_knot_spacing(t, P, R, wts, ro, po, None if rdt == "auto" else rdt,
+                                     None if pdt == "auto" else pdt)
+            ro, rdt = ch["rotation"]["order"], ch["rotation"]["knot_spacing_s"]
+            po, pdt = ch["position"]["order"], ch["position"]["knot_spacing_s"]
+        if kind == "se3":
+            # one grid: the finer spacing, the position's order (the accelerometer's)
+            rdt = pdt = min(rdt, pdt)
+            ro = po = max(ro, po)
+        sig = (1e-3, 1e-3) if ch is None else tuple(max(ch[key]["cv_rms"] / np.sqrt(3.0), 1e-6)
+                                                    for key in ("rotation", "position"))
+        return ch, ro, layout(t[0], t[-1], rdt, ro), po, layout(t[0], t[-1], pdt, po), sig
+
+    choice, r_order, lay_r, p_order, lay_p, (sig_r, sig_p) = settings(w)
 
     bar = None
     if progress:
@@ -514,8 +520,16 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
         dropped = drop
         w2 = w.copy()
         w2[drop] = 0.0
+        if choice is not None:
+            # the glitch steered the choice too (its jump read as noise or motion): choose again
+            choice, r_order, lay_r2, p_order, lay_p, (sig_r, sig_p) = settings(w2)
+            Rc0 = Rc if lay_r2 == lay_r else None
+            lay_r = lay_r2
+        else:
+            Rc0 = Rc
         probs = problems(w2)
-        Rc0 = Rc
+        if Rc0 is None:
+            Rc0 = probs[0].initial_rotations()
     if dropped.any():
         # the residual bursts of the first fit that were glitches are gone; re-check the rest
         _, warnings = classify_residuals(t, P, theta, res_pos, res_rot, probs[0].w)
