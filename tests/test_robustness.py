@@ -191,8 +191,8 @@ def test_compare_refuses_nan_with_its_line(tmp_path):
 
 
 def test_allan_refuses_a_too_short_record_and_bad_density(tmp_path):
-    from splineimu.allan import analyze_recording
     from splineimu.allan.deviation import default_cluster_factors
+    from splineimu.api.allan import analyze_recording
 
     p = tmp_path / "imu.csv"
     p.write_text(_imu(10))
