@@ -55,6 +55,8 @@ _EXPORTS = {
     "write_table": "tables",
     "TableWriter": "tables",
     "write_bag": "bag",
+    "read_calibration_yaml": "calibration_yaml",
+    "write_calibration_yaml": "calibration_yaml",
 }
 
 __all__ = sorted(_EXPORTS)
