@@ -448,8 +448,8 @@ def dead_reckon(imu_path, init=None, method: str = "rk4", gravity=DEFAULT_GRAVIT
     """
     import time
 
-    from .groundtruth import read_groundtruth
     from .io.dataset import recorded_sampling
+    from .io.euroc import read_groundtruth
     from .io.imu_csv import read_imu_csv
 
     imu_path = Path(imu_path)

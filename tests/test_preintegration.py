@@ -589,7 +589,7 @@ def test_cli_preintegrate(tmp_path, capsys):
 def test_evaluate_windows_matches_manual_preintegration(tmp_path):
     out = tmp_path / "o"
     _write_out_folder(out, LECTURE_NOISE, duration_s=2.0)
-    from splineimu.groundtruth import read_groundtruth
+    from splineimu.io.euroc import read_groundtruth
     from splineimu.io.imu_csv import read_imu_csv
 
     t_ns, g, a = read_imu_csv(out / "imu0" / "data.csv")

@@ -16,6 +16,8 @@ heavy; the first use of a name imports its module):
 - text tables (:mod:`~splineimu.io.tables`): :func:`format_table`, :func:`write_table`,
   :class:`TableWriter`
 - ROS bags (:mod:`~splineimu.io.bag`): :func:`write_bag`
+- calibrations (:mod:`~splineimu.io.calibration_yaml`): :func:`read_calibration_yaml`,
+  :func:`write_calibration_yaml`
 
 A ``*Writer`` writes a file piece by piece into an :class:`OutputFolder` (records too long
 to hold); the ``write_*`` function of the same format writes one whole file atomically. Both

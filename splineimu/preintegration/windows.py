@@ -340,8 +340,8 @@ def evaluate_recording(folder, *, imu_csv=None, groundtruth=None, every=None, st
     InputError
         Unreadable files.
     """
-    from ..groundtruth import read_groundtruth
     from ..io.dataset import GROUNDTRUTH_CSV, IMU_CSV, dataset_file, recorded_sampling
+    from ..io.euroc import read_groundtruth
     from ..io.imu_csv import read_imu_csv
 
     out = Path(folder)
