@@ -1,7 +1,7 @@
 """Ground-truth navigation states and their interpolation between stamps.
 
 One implementation for every job that needs the true state at an instant that may fall between
-two ground-truth rows: dead reckoning (:func:`splineimu.integrate.dead_reckon`, the initial
+two ground-truth rows: dead reckoning (:func:`splineimu.api.integrate.dead_reckon`, the initial
 state) and preintegration (:func:`splineimu.preintegration.evaluate_recording`, both ends of
 every window).
 

@@ -24,6 +24,7 @@ _NAMES = {
     "scenefile": ("load_scene_file", "SceneFile"),
     "batch": ("run_batch", "BatchResult"),
     "calibration": ("calibrate_file", "CalibrationRun"),
+    "integrate": ("dead_reckon", "DeadReckoning"),
     "allan": ("analyze_recording", "allan_output_paths", "write_allan_outputs", "plot_allan"),
 }
 _WHERE = {name: mod for mod, names in _NAMES.items() for name in names}
