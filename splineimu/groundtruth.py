@@ -1,8 +1,8 @@
 """Ground-truth navigation states and their interpolation between stamps.
 
 One implementation for every job that needs the true state at an instant that may fall between
-two ground-truth rows: dead reckoning (:func:`splineimu.api.integrate.dead_reckon`, the initial
-state) and preintegration (:func:`splineimu.preintegration.evaluate_recording`, both ends of
+two ground-truth rows: dead reckoning (:func:`splineimu.api.dead_reckon`, the initial
+state) and preintegration (:func:`splineimu.api.evaluate_recording`, both ends of
 every window).
 
 Between stamps ``t_a < t < t_b`` with ``u = (t - t_a) / (t_b - t_a)``, position, velocity and

@@ -14,13 +14,13 @@ import pytest
 from numdiff import assert_jacobian_close, numeric_jacobian
 from scipy import stats
 
+from splineimu.api.preintegration import evaluate_recording
 from splineimu.errors import ConfigError, InputError
 from splineimu.imu.noise import SensorModel
 from splineimu.lie import matrix_to_quat_xyzw, so3_exp, so3_log
 from splineimu.preintegration import (
     Preintegrator,
     delta_error,
-    evaluate_recording,
     evaluate_windows,
     exact_deltas,
     nees,
