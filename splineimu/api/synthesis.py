@@ -327,7 +327,7 @@ def synthesize_scene(job: SynthesisJob, *, echo=None, write: bool = True, prepar
 
     With ``job.output.tum`` the scene's poses at the IMU rate are also written as a TUM file.
     """
-    from .. import scenes
+    from ..io.tum import write_scene_tum
 
     t_wall, result, log = _start(job, SceneInput, echo, write)
     m = job.motion
@@ -336,7 +336,7 @@ def synthesize_scene(job: SynthesisJob, *, echo=None, write: bool = True, prepar
     result.source = scene
     if write and job.output.tum:
         _fits(job, int(scene.t_max_s * job.imu.rate_hz) + 1, False, tum=True)
-        scenes.write_scene_tum(scene, job.output.tum, job.imu.rate_hz)
+        write_scene_tum(scene, job.output.tum, job.imu.rate_hz)
         log.line(f"poses         {job.output.tum} ({job.imu.rate_hz:g} Hz)")
     if write and job.output.dir is None:
         return result

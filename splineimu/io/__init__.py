@@ -5,7 +5,8 @@ heavy; the first use of a name imports its module):
 
 - poses (:mod:`~splineimu.io.poses`): :class:`PoseTrack`, :class:`Gap`, :func:`clean_poses`,
   :func:`find_gaps`, :func:`split_at_gaps`
-- TUM (:mod:`~splineimu.io.tum`): :func:`read_tum`, :func:`write_tum`, :class:`TumWriter`
+- TUM (:mod:`~splineimu.io.tum`): :func:`read_tum`, :func:`write_tum`, :func:`write_scene_tum`,
+  :class:`TumWriter`
 - EuRoC (:mod:`~splineimu.io.euroc`): :func:`read_euroc_groundtruth`, :func:`write_euroc_imu`,
   :func:`write_euroc_groundtruth`, :class:`EurocImuWriter`, :class:`EurocGroundtruthWriter`
 - stamps (:mod:`~splineimu.io.timestamps`): :func:`read_timestamps`, :func:`parse_stamps`
@@ -37,6 +38,7 @@ _EXPORTS = {
     "read_tum": "tum",
     "write_tum": "tum",
     "TumWriter": "tum",
+    "write_scene_tum": "tum",
     "read_euroc_groundtruth": "euroc",
     "write_euroc_imu": "euroc",
     "write_euroc_groundtruth": "euroc",
