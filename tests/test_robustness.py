@@ -181,7 +181,7 @@ def test_wrong_reader_names_the_likely_format(tmp_path):
 
 def test_compare_refuses_nan_with_its_line(tmp_path):
     pytest.importorskip("evo")
-    from splineimu.metrics import compare_files
+    from splineimu.api.compare import compare_files
 
     a, b = tmp_path / "a.tum", tmp_path / "b.tum"
     a.write_text(_tum().replace(" 1 0 0 ", " nan 0 0 ", 1))

@@ -26,6 +26,7 @@ _NAMES = {
     "calibration": ("calibrate_file", "CalibrationRun"),
     "integrate": ("dead_reckon", "DeadReckoning"),
     "preintegration": ("evaluate_recording",),
+    "compare": ("compare_files", "plot_compare"),
     "allan": ("analyze_recording", "allan_output_paths", "write_allan_outputs", "plot_allan"),
 }
 _WHERE = {name: mod for mod, names in _NAMES.items() for name in names}
