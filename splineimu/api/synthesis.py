@@ -292,7 +292,8 @@ def _stamps(job, first_ns: int, last_ns: int, log, seed=None, write=True):
 
 
 def _synthesize(job, source, t_ns, seed, out_dir, report, write, result, force=None, fit_data=None):
-    from ..pipeline import synthesize_stream, write_output
+    from ..pipeline import synthesize_stream
+    from .output import write_output
 
     imu = job.imu
     syn = synthesize_stream(source, t_ns, gravity=imu.gravity, extrinsic=imu.body_T_sensor,

@@ -129,7 +129,7 @@ def load_camchain(path, defaults=None) -> dict:
     >>> cams["cam0"].distortion_coeffs, cams["cam0"].timeshift_cam_imu_s
     ((-0.1, 0.01, 0.0, 0.0), -0.002)
     """
-    from ..io.yaml import read_yaml
+    from ..yamldoc import read_yaml
 
     doc = read_yaml(path, "camchain")
     return cameras_from_kalibr(doc.data, defaults=defaults, doc=doc)
