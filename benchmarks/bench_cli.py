@@ -201,6 +201,7 @@ def _instrumented(acc, loads):
                           sum(self._cache_misses.values()) > misses))
 
     dispatcher.Dispatcher._compile_for_args = counted
+    import splineimu.api.output as ao
     import splineimu.io.tum as tum
     import splineimu.pipeline as pl
     import splineimu.spline.fit as sf
@@ -208,7 +209,7 @@ def _instrumented(acc, loads):
 
     tum.read_tum = timed("read", tum.read_tum)
     sf.fit = timed("fit", sf.fit)
-    pl.write_output = timed("write_output", pl.write_output)
+    ao.write_output = timed("write_output", ao.write_output)
     pieces = pl.SynthesisStream.pieces
 
     def timed_pieces(self):

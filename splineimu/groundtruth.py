@@ -1,20 +1,19 @@
 """Ground-truth navigation states and their interpolation between stamps.
 
 One implementation for every job that needs the true state at an instant that may fall between
-two ground-truth rows: dead reckoning (:func:`splineimu.integrate.dead_reckon`, the initial
-state) and preintegration (:func:`splineimu.preintegration.evaluate_recording`, both ends of
+two ground-truth rows: dead reckoning (:func:`splineimu.api.dead_reckon`, the initial
+state) and preintegration (:func:`splineimu.api.evaluate_recording`, both ends of
 every window).
 
 Between stamps ``t_a < t < t_b`` with ``u = (t - t_a) / (t_b - t_a)``, position, velocity and
 biases are interpolated linearly, ``x = (1 - u) x_a + u x_b``, and the rotation along the
 geodesic, ``R = R_a Exp(u Log(R_a^T R_b))`` (slerp). At a stamp the stored row is returned as it
-is.
+is. The file reader is :func:`splineimu.io.euroc.read_groundtruth`.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
@@ -22,7 +21,7 @@ from .errors import InputError, RangeError
 from .lie import matrix_to_quat_xyzw, quat_xyzw_to_matrix, so3_exp, so3_log
 from .validation import as_quat_xyzw, as_stamps_ns, as_vectors
 
-__all__ = ["GroundTruth", "GroundTruthState", "read_groundtruth"]
+__all__ = ["GroundTruth", "GroundTruthState"]
 
 
 @dataclass
@@ -141,16 +140,3 @@ class GroundTruth:
         R = R0 @ so3_exp(u * so3_log(R0.T @ R1))
         return GroundTruthState(t_ns, lerp(self.position_world), matrix_to_quat_xyzw(R), R,
                                 lerp(self.velocity_world), lerp(self.bias_gyro), lerp(self.bias_accel))
-
-
-def read_groundtruth(path) -> GroundTruth:
-    """Read an EuRoC 17-column ground truth (``state_groundtruth_estimate0/data.csv``).
-
-    Raises
-    ------
-    InputError
-        Unreadable file, or fewer columns (no velocity and biases).
-    """
-    from .io.euroc import read_euroc_groundtruth
-
-    return GroundTruth.from_track(read_euroc_groundtruth(Path(path)))

@@ -51,7 +51,6 @@ E. Hairer, C. Lubich, G. Wanner, "Geometric Numerical Integration", 2nd ed., ch.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
@@ -61,8 +60,7 @@ from .lie import matrix_to_quat_xyzw, quat_make_continuous, quat_normalize, quat
 from .motion import DEFAULT_GRAVITY
 from .validation import as_float_array, as_quat_xyzw, as_times_s, as_vector, as_vectors, finite_float, one_of
 
-__all__ = ["NavState", "Trajectory", "DeadReckoning", "integrate", "dead_reckon", "default_groundtruth_path",
-           "points_from_means", "METHODS", "METHOD_ORDER", "SAMPLINGS"]
+__all__ = ["NavState", "Trajectory", "integrate", "points_from_means", "METHODS", "METHOD_ORDER", "SAMPLINGS"]
 
 #: Sampling modes of IMU data: the value at the stamp, or the mean over [previous stamp, stamp].
 SAMPLINGS = ("point", "mean")
@@ -337,148 +335,3 @@ def integrate(t_s, gyro, accel, init: NavState, method: str = "rk4",
         _k.rk4_kernel(t, w, f, w_mid, f_mid, *args)
     quat = quat_make_continuous(np.ascontiguousarray(q[:, [1, 2, 3, 0]]))
     return Trajectory(t_s=t.copy(), position_world=p, quat_xyzw=quat, velocity_world=v, method=method)
-
-
-# ----------------------------------------------------------------------------- recorded files
-
-
-@dataclass
-class DeadReckoning:
-    """A recording dead-reckoned from its ground-truth initial state (:func:`dead_reckon`).
-
-    Attributes
-    ----------
-    trajectory : Trajectory
-        From the first IMU sample inside the ground truth's span; ``t_s`` relative to it.
-    t_ns : (N,) int64
-        The IMU stamps of the trajectory's rows [ns].
-    imu_path, groundtruth_path : pathlib.Path
-    skipped_samples : int
-        IMU samples before the ground truth starts (not integrated).
-    final_position_error_m : float or None
-        Distance to the ground truth at the last stamp; None when that lies outside it.
-    integrate_time_s : float
-        Wall time of the integration alone [s] (for the command's report; not a result).
-    """
-
-    trajectory: Trajectory
-    t_ns: np.ndarray
-    imu_path: Path
-    groundtruth_path: Path
-    skipped_samples: int = 0
-    final_position_error_m: float | None = None
-    integrate_time_s: float = 0.0
-    sampling: str = "point"
-
-    @property
-    def method(self) -> str:
-        return self.trajectory.method
-
-    def to_dataframe(self):
-        """:meth:`Trajectory.to_dataframe` with the stamps ``t_ns`` in front."""
-        df = self.trajectory.to_dataframe()
-        df.insert(0, "t_ns", self.t_ns)
-        return df
-
-    def write_tum(self, path) -> Path:
-        """Write the trajectory as a TUM file (stamps exact from ``t_ns``), atomically.
-
-        Raises
-        ------
-        ConfigError
-            The output folder does not exist.
-        """
-        from .io.tum import write_tum
-
-        out = Path(path)
-        if not out.resolve().parent.is_dir():
-            raise ConfigError(f"output folder does not exist: {out.resolve().parent}")
-        return write_tum(out, self.t_ns, self.trajectory.position_world, self.trajectory.quat_xyzw)
-
-
-def default_groundtruth_path(imu_csv) -> Path:
-    """``OUT/mav0/state_groundtruth_estimate0/data.csv`` for ``OUT/mav0/imu0/data.csv`` (and the
-    same without ``mav0/``)."""
-    from .io.dataset import groundtruth_beside
-
-    return groundtruth_beside(imu_csv)
-
-
-def dead_reckon(imu_path, init=None, method: str = "rk4", gravity=DEFAULT_GRAVITY,
-                sampling: str | None = None) -> DeadReckoning:
-    """Dead-reckon an EuRoC IMU csv from the ground-truth state at its first covered sample.
-
-    Parameters
-    ----------
-    imu_path : path-like
-        EuRoC ``imu0/data.csv`` (gyro [rad/s], specific force [m/s^2]).
-    init : path-like, optional
-        EuRoC 17-column ground truth for the initial pose, velocity and (constant) biases;
-        default :func:`default_groundtruth_path`. The state is interpolated
-        (:class:`splineimu.groundtruth.GroundTruth`) to the first IMU stamp inside its span;
-        earlier samples are skipped.
-    method : {"euler", "midpoint", "rk4"}
-    gravity : (3,) array_like
-        ``g_w`` [m/s^2].
-    sampling : {"point", "mean"}, optional
-        How the samples were taken; default: as recorded with the data
-        (:func:`splineimu.io.dataset.recorded_sampling`: ``report.json`` of the output folder,
-        else point).
-
-    Returns
-    -------
-    DeadReckoning
-
-    Raises
-    ------
-    ConfigError
-        Missing ground-truth file, or no IMU samples inside its span.
-    InputError
-        Unreadable files.
-
-    Examples
-    --------
-    >>> import tempfile, pathlib
-    >>> d = pathlib.Path(tempfile.mkdtemp())
-    >>> _ = (d / "imu.csv").write_text("".join(f"{i * 5000000},0,0,0,0,0,9.81\\n" for i in range(5)))
-    >>> _ = (d / "gt.csv").write_text("0,1,2,3,1" + ",0" * 12 + "\\n40000000,1,2,3,1" + ",0" * 12 + "\\n")
-    >>> r = dead_reckon(d / "imu.csv", init=d / "gt.csv", method="euler")
-    >>> r.t_ns.tolist(), r.trajectory.position_world[-1].tolist(), r.final_position_error_m
-    ([0, 5000000, 10000000, 15000000, 20000000], [1.0, 2.0, 3.0], 0.0)
-    """
-    import time
-
-    from .groundtruth import read_groundtruth
-    from .io.dataset import recorded_sampling
-    from .io.imu_csv import read_imu_csv
-
-    imu_path = Path(imu_path)
-    sampling = recorded_sampling(imu_path) if sampling is None else one_of(sampling, "sampling", SAMPLINGS)
-    if not imu_path.is_file():
-        raise InputError("IMU file not found" if not imu_path.exists() else "is a folder, expected an IMU csv",
-                         path=imu_path)
-    gt_path = Path(init) if init is not None else default_groundtruth_path(imu_path)
-    if not gt_path.is_file():
-        hint = "" if init is not None else " (the default beside the IMU file); pass --init GROUND_TRUTH"
-        raise ConfigError(f"initial-state file not found: {gt_path}{hint}")
-    one_of(method, "method", METHODS)
-    t_ns, gyro, accel = read_imu_csv(imu_path)
-    gt = read_groundtruth(gt_path)
-    i0 = int(np.searchsorted(t_ns, gt.t_ns[0], side="left"))
-    if i0 >= t_ns.shape[0] or t_ns[i0] > gt.t_ns[-1]:
-        raise ConfigError(f"no IMU sample lies inside the ground truth's time span "
-                          f"[{gt.t_ns[0]}, {gt.t_ns[-1]}] ns of {gt_path}")
-    s = gt.state_at(t_ns[i0])
-    init_state = NavState(0.0, s.position_world, s.quat_xyzw, s.velocity_world, s.bias_gyro, s.bias_accel)
-    t_ns = t_ns[i0:]
-    if t_ns.shape[0] < 2:
-        raise ConfigError(f"fewer than 2 IMU samples inside the ground truth's time span ({gt_path})")
-    t_s = (t_ns - t_ns[0]).astype(np.float64) / 1e9
-    tic = time.perf_counter()
-    traj = integrate(t_s, gyro[i0:], accel[i0:], init_state, method=method, gravity=gravity, sampling=sampling)
-    elapsed = time.perf_counter() - tic
-    err = None
-    if gt.covers(t_ns[-1]):
-        err = float(np.linalg.norm(traj.position_world[-1] - gt.state_at(t_ns[-1]).position_world))
-    return DeadReckoning(traj, t_ns, imu_path, gt_path, skipped_samples=i0, final_position_error_m=err,
-                         integrate_time_s=elapsed, sampling=sampling)

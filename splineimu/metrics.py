@@ -3,7 +3,7 @@
 evo (GPLv3, https://github.com/MichaelGrupp/evo) is an optional extra of splineimu
 (``pip install 'splineimu[evo]'``); it is imported only inside these functions. The steps
 follow ``evo_ape tum`` / ``evo_rpe tum`` exactly: read the TUM files with
-``file_interface.read_tum_trajectory_file``, associate the reference with the estimate by
+``file_interface.read_tum_trajectory_file`` (:mod:`splineimu.api.compare`), associate the reference with the estimate by
 nearest time stamps (``sync.associate_trajectories(ref, est, max_diff, offset_2)``; the offset
 is added to the estimate's stamps), align the estimate (Umeyama SE3 or Sim3, or origin), then
 ``metrics.APE`` / ``metrics.RPE``. Statistics are printed as evo prints them
@@ -39,8 +39,8 @@ import numpy as np
 from .errors import ConfigError, InputError, SplineImuError
 from .validation import as_quat_xyzw, as_times_s, as_vectors, nonnegative_float, one_of, positive_float
 
-__all__ = ["MetricResult", "CompareResult", "compare", "compare_files", "plot_compare", "load_tum", "EVO_MISSING",
-           "POSE_RELATIONS", "ALIGN_MODES", "DELTA_UNITS"]
+__all__ = ["MetricResult", "CompareResult", "compare", "check_compare_options", "EVO_MISSING", "POSE_RELATIONS",
+           "ALIGN_MODES", "DELTA_UNITS"]
 
 EVO_MISSING = "splineimu compare needs evo: pip install 'splineimu[evo]'"
 
@@ -136,7 +136,7 @@ class CompareResult:
     est_positions_aligned : (n, 3) float64
         Associated estimate positions after alignment [m].
     plot_path : pathlib.Path or None
-        The plot :func:`compare_files` saved, if any.
+        The plot :func:`splineimu.api.compare.compare_files` saved, if any.
     """
 
     ape: MetricResult | None
@@ -167,37 +167,11 @@ class CompareResult:
                              for r in self.results])
 
 
-def load_tum(path):
-    """Read a TUM file into an evo ``PoseTrajectory3D`` (evo's own reader).
-
-    Raises
-    ------
-    InputError
-        Missing or malformed file.
-    """
-    _, _, _, file_interface = _evo()
-    p = Path(path)
-    if not p.is_file():
-        raise InputError("no such file", path=p)
-    try:
-        traj = file_interface.read_tum_trajectory_file(str(p))
-    except Exception as exc:
-        raise InputError(str(exc) or type(exc).__name__, path=p) from None
-    if not all(np.isfinite(a).all() for a in (traj.timestamps, traj.positions_xyz, traj.orientations_quat_wxyz)):
-        from .io.tum import read_tum
-
-        read_tum(p, min_poses=1, repeated_stamps="first")  # names the line and the value
-        raise InputError("holds a value that is not a finite number", path=p)
-    return traj
-
-
 def _as_evo(traj, name):
-    """A TUM path, an evo PoseTrajectory3D, an object with ``t_s``/``position_world``/
-    ``quat_xyzw`` (e.g. :class:`splineimu.integrate.Trajectory`), or a tuple
-    ``(t_s, positions, quat_xyzw)``."""
+    """An evo PoseTrajectory3D, an object with ``t_s``/``position_world``/``quat_xyzw`` (e.g.
+    :class:`splineimu.integrate.Trajectory`), or a tuple ``(t_s, positions, quat_xyzw)``; TUM files
+    are read by :func:`splineimu.api.compare.load_tum`."""
     _, _, trajectory, _ = _evo()
-    if isinstance(traj, (str, Path)):
-        return load_tum(traj)
     if isinstance(traj, trajectory.PoseTrajectory3D):
         return copy.deepcopy(traj)
     if hasattr(traj, "position_world") and hasattr(traj, "quat_xyzw") and hasattr(traj, "t_s"):
@@ -205,8 +179,8 @@ def _as_evo(traj, name):
     elif isinstance(traj, tuple) and len(traj) == 3:
         t, p, q = traj
     else:
-        raise ConfigError(f"`{name}` must be a TUM path, a trajectory object or a tuple "
-                          f"(t_s, positions, quat_xyzw); got {type(traj).__name__}")
+        raise ConfigError(f"`{name}` must be a trajectory object or a tuple (t_s, positions, quat_xyzw) "
+                          f"(TUM files: splineimu.api.compare); got {type(traj).__name__}")
     t = as_times_s(t, f"{name} t_s")
     n = t.shape[0]
     if n < 1:
@@ -245,6 +219,25 @@ def _frames_from_seconds(timestamps, delta_s) -> int:
     return frames
 
 
+def check_compare_options(metric: str = "ape", pose_relation: str = "trans", align: str = "none",
+                          delta: float = 1.0, delta_unit: str = "f", t_max_diff: float = 0.01) -> tuple:
+    """The checks of :func:`compare`'s options; returns ``(delta, t_max_diff)`` as floats.
+
+    Raises
+    ------
+    ConfigError
+        A bad option.
+    """
+    one_of(metric, "metric", ("ape", "rpe", "both"))
+    one_of(pose_relation, "pose_relation", tuple(POSE_RELATIONS))
+    one_of(align, "align", ALIGN_MODES)
+    one_of(delta_unit, "delta_unit", tuple(DELTA_UNITS))
+    delta = positive_float(delta, "delta")
+    if delta_unit == "f" and float(delta) != int(delta):
+        raise ConfigError(f"RPE delta in frames must be a whole number, got {delta}", option="delta")
+    return delta, nonnegative_float(t_max_diff, "t_max_diff")
+
+
 def compare(est, ref, *, metric: str = "ape", pose_relation: str = "trans", align: str = "none",
             delta: float = 1.0, delta_unit: str = "f", all_pairs: bool = False,
             t_max_diff: float = 0.01, t_offset: float = 0.0) -> CompareResult:
@@ -252,9 +245,10 @@ def compare(est, ref, *, metric: str = "ape", pose_relation: str = "trans", alig
 
     Parameters
     ----------
-    est, ref : str, os.PathLike, Trajectory-like or tuple
-        TUM files, evo ``PoseTrajectory3D``, objects with ``t_s``, ``position_world``,
-        ``quat_xyzw``, or tuples ``(t_s, positions (N, 3), quat_xyzw (N, 4))``.
+    est, ref : Trajectory-like or tuple
+        evo ``PoseTrajectory3D``, objects with ``t_s``, ``position_world``, ``quat_xyzw``, or
+        tuples ``(t_s, positions (N, 3), quat_xyzw (N, 4))``
+        (:func:`splineimu.api.compare.compare` also takes TUM files).
     metric : {"ape", "rpe", "both"}
     pose_relation : {"trans", "rot", "full", "angle_deg", "angle_rad", "point_distance"}
         See the module notes for evo's equivalents.
@@ -278,7 +272,7 @@ def compare(est, ref, *, metric: str = "ape", pose_relation: str = "trans", alig
     SplineImuError
         evo is not installed.
     InputError
-        Missing or malformed TUM file.
+        A trajectory without poses.
     ConfigError
         Bad options, no associated stamps, or an RPE delta that gives no pose pairs.
 
@@ -299,14 +293,7 @@ def compare(est, ref, *, metric: str = "ape", pose_relation: str = "trans", alig
     0.1
     """
     metrics, sync, _, _ = _evo()
-    one_of(metric, "metric", ("ape", "rpe", "both"))
-    one_of(pose_relation, "pose_relation", tuple(POSE_RELATIONS))
-    one_of(align, "align", ALIGN_MODES)
-    one_of(delta_unit, "delta_unit", tuple(DELTA_UNITS))
-    delta = positive_float(delta, "delta")
-    if delta_unit == "f" and float(delta) != int(delta):
-        raise ConfigError(f"RPE delta in frames must be a whole number, got {delta}", option="delta")
-    t_max_diff = nonnegative_float(t_max_diff, "t_max_diff")
+    delta, t_max_diff = check_compare_options(metric, pose_relation, align, delta, delta_unit, t_max_diff)
     relation = getattr(metrics.PoseRelation, POSE_RELATIONS[pose_relation])
 
     traj_est = _as_evo(est, "est")
@@ -359,78 +346,3 @@ def compare(est, ref, *, metric: str = "ape", pose_relation: str = "trans", alig
         ref_positions=np.array(traj_ref.positions_xyz, dtype=np.float64),
         est_positions_aligned=np.array(traj_est.positions_xyz, dtype=np.float64),
     )
-
-
-def compare_files(est_path, ref_path, *, plot=None, **options) -> CompareResult:
-    """APE / RPE of an estimated TUM file against a reference TUM file (what ``splineimu compare`` runs).
-
-    Parameters
-    ----------
-    est_path, ref_path : path-like
-        TUM files (note the order: estimate first, unlike evo's command line).
-    plot : path-like, optional
-        Also save :func:`plot_compare`'s figure there (:attr:`CompareResult.plot_path`).
-    **options
-        ``metric``, ``pose_relation``, ``align``, ``delta``, ``delta_unit``, ``all_pairs``,
-        ``t_max_diff``, ``t_offset`` of :func:`compare`.
-
-    Returns
-    -------
-    CompareResult
-
-    Raises
-    ------
-    SplineImuError, InputError, ConfigError
-        As :func:`compare`.
-
-    Examples
-    --------
-    >>> import tempfile, pathlib
-    >>> d = pathlib.Path(tempfile.mkdtemp())
-    >>> _ = (d / "ref.tum").write_text("".join(f"{i}.0 {i} 0 0 0 0 0 1\\n" for i in range(5)))
-    >>> _ = (d / "est.tum").write_text("".join(f"{i}.0 {i} 0.5 0 0 0 0 1\\n" for i in range(5)))
-    >>> r = compare_files(d / "est.tum", d / "ref.tum", metric="both")
-    >>> round(float(r.ape.stats["max"]), 6), r.to_dataframe()["metric"].tolist()
-    (0.5, ['ape', 'rpe'])
-    """
-    res = compare(Path(est_path), Path(ref_path), **options)
-    if plot is not None:
-        res.plot_path = plot_compare(res, plot)
-    return res
-
-
-def plot_compare(result: CompareResult, path) -> Path:
-    """Save a PNG: reference and aligned estimate (x-y), and the error(s) over time.
-
-    The figure is rendered by matplotlib's Agg canvas without pyplot, so no display is needed.
-    """
-    from matplotlib.figure import Figure  # no pyplot: no GUI backend, no global state
-
-    res = result.results
-    fig = Figure(figsize=(6.0 + 5.0 * len(res), 5.0), layout="constrained")
-    axes = fig.subplots(1, 1 + len(res), squeeze=False)[0]
-    ax = axes[0]
-    ax.plot(result.est_positions_aligned[:, 0], result.est_positions_aligned[:, 1], "C0", lw=1.2,
-            label=f"estimate ({'not aligned' if result.align == 'none' else result.align + ' aligned'})")
-    ax.plot(result.ref_positions[:, 0], result.ref_positions[:, 1], "k--", lw=0.8, label="reference")
-    ax.set_xlabel("x (m)")
-    ax.set_ylabel("y (m)")
-    ax.set_aspect("equal", adjustable="datalim")
-    ax.legend(loc="best", fontsize="small")
-    ax.set_title(f"{result.n_associated} associated poses")
-    t0 = result.timestamps_s[0] if result.timestamps_s.size else 0.0
-    for ax, r in zip(axes[1:], res):
-        ax.plot(r.timestamps_s - t0, r.errors, "C1", lw=1.0, label=r.metric.upper())
-        for name, style in (("rmse", "C3-"), ("median", "C2--"), ("mean", "C4:")):
-            ax.axhline(r.stats[name], color=style[:2], ls=style[2:], lw=1.0,
-                       label=f"{name} {r.stats[name]:.6g}")
-        ax.set_xlabel("t (s)")
-        ax.set_ylabel(f"{r.metric.upper()} ({r.unit})")
-        ax.set_title(r.title, fontsize="small")
-        ax.legend(loc="best", fontsize="small")
-    from .io.files import staged_path
-
-    out = Path(path)
-    with staged_path(out) as tmp:  # a failure or an interrupt leaves what was there
-        fig.savefig(tmp, dpi=110, format="png")
-    return out

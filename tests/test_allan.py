@@ -13,14 +13,12 @@ from conftest import require_shared
 from splineimu.allan import (
     FLICKER_FLOOR,
     allan_deviation,
-    allan_output_paths,
-    analyze_recording,
     default_cluster_factors,
     edf_oadev,
     fit_noise_parameters,
     imu_noise_dict,
-    write_allan_outputs,
 )
+from splineimu.api.allan import allan_output_paths, analyze_recording, write_allan_outputs
 from splineimu.cli import main
 from splineimu.errors import ConfigError, InputError, OutputExistsError
 from splineimu.imu.config import load_imu_config

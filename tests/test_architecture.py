@@ -11,8 +11,6 @@ from __future__ import annotations
 import ast
 from pathlib import Path
 
-import pytest
-
 REPO = Path(__file__).resolve().parent.parent
 PKG = REPO / "splineimu"
 
@@ -218,9 +216,6 @@ def test_layers_import_only_lower_layers():
     assert not bad, "imports against the layers (README, Architecture):\n" + "\n".join(bad)
 
 
-@pytest.mark.xfail(strict=False, reason="the jobs that read or write files (allan.recording, calibration.api, "
-                   "integrate, preintegration.windows, groundtruth, imu presets, scenes.tum, pipeline) still "
-                   "live in math packages; move them to api/ (or the format code to io/) to make this pass")
 def test_math_never_imports_io():
     bad = [v for v in layer_violations(allow_math_io=False) if v.endswith("(io)") and "(math) imports" in v]
     assert not bad, "math modules importing io:\n" + "\n".join(bad)

@@ -19,15 +19,14 @@ from splineimu.calibration import (
     calibrate_gyro,
     find_steady_phases,
     intrinsics_from_config,
-    read_calibration_yaml,
     split_scale_misalignment,
     tilt_moments,
-    write_calibration_yaml,
 )
 from splineimu.cli import main
 from splineimu.errors import ConfigError, InputError, OutputExistsError
 from splineimu.imu.config import load_imu_config
 from splineimu.imu.noise import SensorModel
+from splineimu.io.calibration_yaml import read_calibration_yaml, write_calibration_yaml
 from splineimu.scenes import SCENES, make_scene, scene_names
 from splineimu.scenes.calibration import SIX_POSITION_ORDER, nominal_up_rotation
 

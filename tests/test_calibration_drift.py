@@ -11,10 +11,10 @@ import pytest
 import yaml
 from test_calibration import TRUE_INTRINSICS as INTRINSICS
 
+from splineimu.api.calibration import calibrate_file
 from splineimu.calibration import (
     CalibrationOptions,
     calibrate_accel,
-    calibrate_file,
     calibrate_gyro,
     intrinsics_from_config,
 )

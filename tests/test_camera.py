@@ -11,12 +11,10 @@ from splineimu.camera import (
     Landmarks,
     load_camchain,
     read_features_csv,
-    write_camchain,
-    write_features_csv,
-    write_openvins_imucam_chain,
 )
 from splineimu.camera.camchain import cameras_from_kalibr
 from splineimu.errors import ConfigError, InputError
+from splineimu.io.camera import write_camchain, write_features_csv, write_landmarks_csv, write_openvins_imucam_chain
 from splineimu.scenes import make_scene
 
 cv2 = pytest.importorskip("cv2")
@@ -212,7 +210,7 @@ def test_camchain_file_errors_name_the_file_and_line(tmp_path):
 
 def test_landmarks_csv_round_trip_keeps_ids(tmp_path):
     lm = Landmarks([1000, 3, 42], [[0.1, 2.0, -3.5], [1 / 3, 1e-17, 5e20], [0.0, -0.0, 7.0]])
-    path = lm.to_csv(tmp_path / "landmarks.csv")
+    path = write_landmarks_csv(tmp_path / "landmarks.csv", lm)
     back = Landmarks.from_csv(path)
     assert back == lm and back.id.tolist() == [1000, 3, 42]
 
@@ -280,7 +278,8 @@ def test_features_csv_is_exact_and_atomic(tmp_path):
 
 
 def test_scene_values_and_output_files(tmp_path):
-    from splineimu.camera import cameras_from_config, landmarks_from_config, observe, write_camera_outputs
+    from splineimu.camera import cameras_from_config, landmarks_from_config, observe
+    from splineimu.io.camera import write_camera_outputs
 
     write_camchain(tmp_path / "kalibr.yaml", two_cameras())
     text = (tmp_path / "kalibr.yaml").read_text().replace("  rate_hz: 20.0\n", "")  # as Kalibr writes it
@@ -288,7 +287,7 @@ def test_scene_values_and_output_files(tmp_path):
     cams = cameras_from_config({"file": "kalibr.yaml", "rate_hz": 10.0}, base_dir=tmp_path)
     assert [c.rate_hz for c in cams.values()] == [10.0, 10.0]
     assert cams["cam1"].pixel_noise_px == 0.75  # the file's own value wins over a default
-    Landmarks([5, 6], [[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]]).to_csv(tmp_path / "points.csv")
+    write_landmarks_csv(tmp_path / "points.csv", Landmarks([5, 6], [[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]]))
     assert landmarks_from_config({"file": "points.csv"}, base_dir=tmp_path).id.tolist() == [5, 6]
     scene = make_scene("ellipse", duration_s=1.0)
     lm = landmarks_from_config({"random": {"count": 300, "shape": "shell", "radii_m": [3, 30]}}, source=scene, rng=2)

@@ -14,8 +14,9 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from splineimu.camera import Camera, Landmarks, observe, write_features_csv
+from splineimu.camera import Camera, Landmarks, observe
 from splineimu.camera.observations import frame_stamps_ns, observe_camera
+from splineimu.io.camera import write_features_csv
 from splineimu.motion import MotionSource
 from splineimu.scenes import make_scene
 

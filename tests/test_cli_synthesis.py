@@ -234,8 +234,9 @@ def test_real_openvins_14_columns_and_utm_coordinates(tmp_path, capsys):
 def test_streamed_output_equals_the_whole_record_byte_for_byte(tmp_path, sampling, increments):
     """write_output of a SynthesisStream in small pieces (noise processes, quaternion signs
     and interval starts continuing across pieces) writes the same bytes as of one Synthesis."""
+    from splineimu.api.output import write_output
     from splineimu.imu.ideal import Extrinsic
-    from splineimu.pipeline import synthesize, synthesize_stream, write_output
+    from splineimu.pipeline import synthesize, synthesize_stream
     from splineimu.timegrid import uniform_stamps_ns
 
     scene = make_scene("flips", duration_s=6.0, t0_ns=1_700_000_000_123_456_789)

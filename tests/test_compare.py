@@ -14,9 +14,10 @@ import pytest
 from conftest import require_shared
 
 from splineimu import cli
+from splineimu.api.compare import compare, compare_files
 from splineimu.errors import ConfigError, InputError, SplineImuError
 from splineimu.lie import matrix_to_quat_xyzw, quat_xyzw_to_matrix, so3_exp
-from splineimu.metrics import EVO_MISSING, compare, compare_files
+from splineimu.metrics import EVO_MISSING
 from splineimu.scenes import make_scene
 
 pytest.importorskip("evo")

@@ -9,6 +9,7 @@ from conftest import require_shared
 
 from splineimu.errors import ConfigError, InputError
 from splineimu.imu.config import ImuConfig, list_presets, load_imu_config, load_preset
+from splineimu.io.imu_yaml import write_imu_config
 
 EVERY_KEY = {
     "gyroscope_noise_density": [1e-4, 2e-4, 3e-4],
@@ -58,7 +59,7 @@ def test_kalibr_keys_scalar_and_per_axis():
 
 def test_every_key_round_trips_through_yaml(tmp_path):
     c = ImuConfig.from_dict(EVERY_KEY, source="test")
-    p = c.to_yaml(tmp_path / "imu.yaml", header="made by a test")
+    p = write_imu_config(c, tmp_path / "imu.yaml", header="made by a test")
     assert sorted(x.name for x in tmp_path.iterdir()) == ["imu.yaml"]  # no temporary left behind
     text = p.read_text()
     assert text.startswith("%YAML 1.1\n---\n# made by a test\n")
@@ -85,7 +86,7 @@ def test_imu_yaml_is_kalibr_form_read_by_pyyaml(tmp_path):
     c = ImuConfig.from_dict({"gyroscope_noise_density": 1.6968e-4, "gyroscope_random_walk": 2e-5,
                              "accelerometer_noise_density": 2e-3, "accelerometer_random_walk": 3e-3,
                              "update_rate": 200})
-    p = c.to_yaml(tmp_path / "imu.yaml", update_rate=400, rostopic="/vectornav/IMU")
+    p = write_imu_config(c, tmp_path / "imu.yaml", update_rate=400, rostopic="/vectornav/IMU")
     lines = [x for x in p.read_text().splitlines() if not x.startswith("#")]
     assert lines == ["%YAML 1.1", "---", "gyroscope_noise_density: 0.00016968", "gyroscope_random_walk: 2.0e-05",
                      "accelerometer_noise_density: 0.002", "accelerometer_random_walk: 0.003",
@@ -94,7 +95,7 @@ def test_imu_yaml_is_kalibr_form_read_by_pyyaml(tmp_path):
     assert d["update_rate"] == 400.0 and d["gyroscope_random_walk"] == 2e-5 and d["rostopic"] == "/vectornav/IMU"
     assert all(type(v) is float for k, v in d.items() if k != "rostopic")
     assert ImuConfig.from_yaml(p).update_rate == 400.0
-    full = ImuConfig.from_dict(EVERY_KEY).to_yaml(tmp_path / "full.yaml")
+    full = write_imu_config(ImuConfig.from_dict(EVERY_KEY), tmp_path / "full.yaml")
     numbers = _numbers(yaml.safe_load(full.read_text()))
     assert len(numbers) > 60 and all(type(v) is float for v in numbers)
     assert "rostopic: /imu0\n" in full.read_text()  # the default topic
@@ -103,7 +104,7 @@ def test_imu_yaml_is_kalibr_form_read_by_pyyaml(tmp_path):
 def test_imu_yaml_is_read_by_opencv_filestorage(tmp_path):
     cv2 = pytest.importorskip("cv2")
     c = ImuConfig.from_dict(dict(EVERY_KEY, temperature_profile=30.0, gyroscope_random_walk=2e-5))
-    p = c.to_yaml(tmp_path / "imu.yaml")
+    p = write_imu_config(c, tmp_path / "imu.yaml")
     fs = cv2.FileStorage(str(p), cv2.FILE_STORAGE_READ)
     assert fs.isOpened()
     d = c.to_dict()

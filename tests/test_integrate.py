@@ -8,6 +8,7 @@ from conftest import require_shared
 
 from splineimu import cli
 from splineimu._kernels.integrate import interp_mid_kernel
+from splineimu.api.integrate import dead_reckon, default_groundtruth_path
 from splineimu.errors import ConfigError, InputError, RangeError
 from splineimu.groundtruth import GroundTruth
 from splineimu.integrate import (
@@ -15,8 +16,6 @@ from splineimu.integrate import (
     METHODS,
     NavState,
     Trajectory,
-    dead_reckon,
-    default_groundtruth_path,
     integrate,
 )
 from splineimu.lie import quat_xyzw_to_matrix, so3_exp, so3_log

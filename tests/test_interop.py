@@ -300,8 +300,8 @@ def test_bag_version_needs_a_ros2_bag():
 
 @pytest.mark.parametrize("method", ["rk4", "midpoint"])
 def test_dead_reckoning_of_mean_samples_is_as_accurate_as_of_point_samples(tmp_path, method):
-    from splineimu.integrate import dead_reckon
-    from splineimu.preintegration import evaluate_recording
+    from splineimu.api.integrate import dead_reckon
+    from splineimu.api.preintegration import evaluate_recording
 
     err, pre = {}, {}
     for sampling in ("point", "mean"):

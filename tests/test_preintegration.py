@@ -14,13 +14,13 @@ import pytest
 from numdiff import assert_jacobian_close, numeric_jacobian
 from scipy import stats
 
+from splineimu.api.preintegration import evaluate_recording
 from splineimu.errors import ConfigError, InputError
 from splineimu.imu.noise import SensorModel
 from splineimu.lie import matrix_to_quat_xyzw, so3_exp, so3_log
 from splineimu.preintegration import (
     Preintegrator,
     delta_error,
-    evaluate_recording,
     evaluate_windows,
     exact_deltas,
     nees,
@@ -589,7 +589,7 @@ def test_cli_preintegrate(tmp_path, capsys):
 def test_evaluate_windows_matches_manual_preintegration(tmp_path):
     out = tmp_path / "o"
     _write_out_folder(out, LECTURE_NOISE, duration_s=2.0)
-    from splineimu.groundtruth import read_groundtruth
+    from splineimu.io.euroc import read_groundtruth
     from splineimu.io.imu_csv import read_imu_csv
 
     t_ns, g, a = read_imu_csv(out / "imu0" / "data.csv")

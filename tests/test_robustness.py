@@ -181,7 +181,7 @@ def test_wrong_reader_names_the_likely_format(tmp_path):
 
 def test_compare_refuses_nan_with_its_line(tmp_path):
     pytest.importorskip("evo")
-    from splineimu.metrics import compare_files
+    from splineimu.api.compare import compare_files
 
     a, b = tmp_path / "a.tum", tmp_path / "b.tum"
     a.write_text(_tum().replace(" 1 0 0 ", " nan 0 0 ", 1))
@@ -191,8 +191,8 @@ def test_compare_refuses_nan_with_its_line(tmp_path):
 
 
 def test_allan_refuses_a_too_short_record_and_bad_density(tmp_path):
-    from splineimu.allan import analyze_recording
     from splineimu.allan.deviation import default_cluster_factors
+    from splineimu.api.allan import analyze_recording
 
     p = tmp_path / "imu.csv"
     p.write_text(_imu(10))

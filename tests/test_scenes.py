@@ -15,6 +15,7 @@ from scipy.spatial.transform import Rotation
 
 from splineimu import scenes
 from splineimu.errors import ConfigError, RangeError
+from splineimu.io.tum import write_scene_tum
 from splineimu.lie import quat_xyzw_to_matrix, se3_hat, so3_exp
 from splineimu.scenes import (
     SCENES,
@@ -24,7 +25,6 @@ from splineimu.scenes import (
     make_scene,
     register_scene,
     scene_names,
-    write_scene_tum,
 )
 
 BUILTIN = ["ellipse", "static", "circle", "screw", "flips"]

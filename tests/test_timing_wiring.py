@@ -14,10 +14,11 @@ import pytest
 
 from splineimu import scenes
 from splineimu.api import ImuOptions, OutputOptions, SceneInput, SynthesisJob, load_scene_file, run_job
+from splineimu.api.output import write_output
 from splineimu.errors import ConfigError
 from splineimu.imu.timing import TimingModel
 from splineimu.imu.vibration import VibrationModel
-from splineimu.pipeline import VIBRATION_SEED_KEY, child_seed, synthesize_stream, write_output
+from splineimu.pipeline import VIBRATION_SEED_KEY, child_seed, synthesize_stream
 from splineimu.timegrid import uniform_stamps_ns
 
 RATE = 200.0

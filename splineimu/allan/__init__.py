@@ -5,9 +5,10 @@
 - :mod:`.fit`: :func:`fit_noise_parameters`, white noise N, random walk K and bias instability B
   in Kalibr's continuous units;
 - :mod:`.report`: the Kalibr-keyed ``allan.yaml`` mapping (:func:`imu_noise_dict`) and the text table;
-- :mod:`.plot`: :func:`plot_allan`;
-- :mod:`.recording`: :func:`analyze_recording` and :func:`write_allan_outputs`, what
-  ``splineimu allan`` runs.
+- :mod:`.recording`: :class:`AllanAnalysis`, the result of one recording.
+
+Reading a recording and writing ``allan.yaml`` / ``allan.png`` (:func:`splineimu.api.analyze_recording`,
+:func:`splineimu.api.write_allan_outputs`, :func:`splineimu.api.plot_allan`) are jobs of the library API.
 """
 
 from __future__ import annotations
@@ -20,12 +21,10 @@ from .deviation import (
     edf_oadev,
 )
 from .fit import NoiseFit, fit_noise_parameters
-from .plot import plot_allan
-from .recording import AllanAnalysis, allan_output_paths, analyze_recording, write_allan_outputs
+from .recording import AllanAnalysis
 from .report import format_table, imu_noise_dict
 
 __all__ = [
     "AllanResult", "NoiseFit", "AllanAnalysis", "allan_deviation", "fit_noise_parameters", "default_cluster_factors",
-    "edf_oadev", "FLICKER_FLOOR", "imu_noise_dict", "format_table", "plot_allan", "analyze_recording",
-    "allan_output_paths", "write_allan_outputs",
+    "edf_oadev", "FLICKER_FLOOR", "imu_noise_dict", "format_table",
 ]

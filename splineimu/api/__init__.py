@@ -10,6 +10,9 @@ Build a :class:`SynthesisJob` (in Python, from command-line flags, or from a sce
     result = run_job(job)            # writes out/, returns the report and the fit report
     arrays = synthesize_to_memory(job).synthesis   # or keep the data in memory
 
+The jobs that read or write files are here too: :func:`analyze_recording` (``splineimu allan``),
+:func:`calibrate_file`, :func:`dead_reckon`, :func:`evaluate_recording`, :func:`compare_files`.
+
 Names are imported lazily (``import splineimu.api`` does not import numpy).
 """
 
@@ -23,6 +26,11 @@ _NAMES = {
                   "synthesize_scene", "synthesize_to_memory"),
     "scenefile": ("load_scene_file", "SceneFile"),
     "batch": ("run_batch", "BatchResult"),
+    "calibration": ("calibrate_file", "CalibrationRun"),
+    "integrate": ("dead_reckon", "DeadReckoning"),
+    "preintegration": ("evaluate_recording",),
+    "compare": ("compare_files", "plot_compare"),
+    "allan": ("analyze_recording", "allan_output_paths", "write_allan_outputs", "plot_allan"),
 }
 _WHERE = {name: mod for mod, names in _NAMES.items() for name in names}
 

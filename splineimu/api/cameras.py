@@ -187,7 +187,8 @@ def write_job_cameras(tmp, landmarks, observations, plot=False) -> list:
 
     Returns the names of the plots written (``<cam>_frame.png``).
     """
-    from ..camera import plot_frame, write_camera_outputs
+    from ..camera import plot_frame
+    from ..io.camera import write_camera_outputs
 
     cams = [o.camera for o in observations.values()]
     write_camera_outputs(tmp, cams, observations, landmarks)

@@ -444,7 +444,7 @@ class OutputOptions(_Checked):
     Parameters
     ----------
     dir : str, optional
-        The output folder (EuRoC-like layout; see :func:`splineimu.pipeline.write_output`).
+        The output folder (EuRoC-like layout; see :func:`splineimu.api.output.write_output`).
     force : bool
         Replace an existing non-empty folder.
     bag : {None, "ros1", "ros2"}

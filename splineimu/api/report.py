@@ -1,6 +1,6 @@
 """What a synthesis job reports: the ``report.json`` sections of its input, and its summary lines.
 
-:func:`splineimu.pipeline.write_output` adds the ``imu`` and ``versions`` sections. Nothing
+:func:`splineimu.api.output.write_output` adds the ``imu`` and ``versions`` sections. Nothing
 here depends on the wall clock: the same job gives the same ``report.json`` bytes (timings are
 printed, not written).
 """

@@ -292,7 +292,8 @@ def _stamps(job, first_ns: int, last_ns: int, log, seed=None, write=True):
 
 
 def _synthesize(job, source, t_ns, seed, out_dir, report, write, result, force=None, fit_data=None):
-    from ..pipeline import synthesize_stream, write_output
+    from ..pipeline import synthesize_stream
+    from .output import write_output
 
     imu = job.imu
     syn = synthesize_stream(source, t_ns, gravity=imu.gravity, extrinsic=imu.body_T_sensor,
@@ -327,7 +328,7 @@ def synthesize_scene(job: SynthesisJob, *, echo=None, write: bool = True, prepar
 
     With ``job.output.tum`` the scene's poses at the IMU rate are also written as a TUM file.
     """
-    from .. import scenes
+    from ..io.tum import write_scene_tum
 
     t_wall, result, log = _start(job, SceneInput, echo, write)
     m = job.motion
@@ -336,7 +337,7 @@ def synthesize_scene(job: SynthesisJob, *, echo=None, write: bool = True, prepar
     result.source = scene
     if write and job.output.tum:
         _fits(job, int(scene.t_max_s * job.imu.rate_hz) + 1, False, tum=True)
-        scenes.write_scene_tum(scene, job.output.tum, job.imu.rate_hz)
+        write_scene_tum(scene, job.output.tum, job.imu.rate_hz)
         log.line(f"poses         {job.output.tum} ({job.imu.rate_hz:g} Hz)")
     if write and job.output.dir is None:
         return result

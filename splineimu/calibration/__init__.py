@@ -130,17 +130,17 @@ Modules
 :mod:`~splineimu.calibration.segmentation` (step 1), :mod:`~splineimu.calibration.estimate`
 (steps 2, 3 and the entry points), :mod:`~splineimu.calibration.solve` (step 4 and the tilt
 moments), :mod:`~splineimu.calibration.result` (results), :mod:`~splineimu.calibration.correct`
-(using a calibration), :mod:`~splineimu.calibration.files` (``calibration.yaml``),
-:mod:`~splineimu.calibration.options` and :mod:`~splineimu.calibration.api`
-(:func:`calibrate_file`, the library behind ``splineimu calibrate``).
+(using a calibration), :mod:`~splineimu.calibration.files` (the ``calibration.yaml`` mapping) and
+:mod:`~splineimu.calibration.options`. Reading and writing ``calibration.yaml`` is
+:mod:`splineimu.io.calibration_yaml`; :func:`splineimu.api.calibrate_file` is the job behind
+``splineimu calibrate``.
 """
 
 from __future__ import annotations
 
-from .api import CalibrationRun, calibrate_file
 from .correct import apply_calibration, intrinsics_from_config
 from .estimate import MAGNITUDE_RATIO_RANGE, calibrate_accel, calibrate_gyro
-from .files import calibration_yaml_dict, read_calibration_yaml, write_calibration_yaml
+from .files import calibration_yaml_dict
 from .options import CalibrationOptions
 from .result import (
     PARAMETER_NAMES,
@@ -155,8 +155,8 @@ from .solve import tilt_moments
 
 __all__ = [
     "SteadyPhase", "SensorCalibration", "AccelCalibration", "GyroCalibration", "CalibrationOptions",
-    "CalibrationRun", "find_steady_phases", "calibrate_accel", "calibrate_gyro", "calibrate_file",
+    "find_steady_phases", "calibrate_accel", "calibrate_gyro",
     "apply_calibration", "intrinsics_from_config", "split_scale_misalignment", "calibration_yaml_dict",
-    "write_calibration_yaml", "read_calibration_yaml", "tilt_moments", "PARAMETER_NAMES",
+    "tilt_moments", "PARAMETER_NAMES",
     "MAGNITUDE_RATIO_RANGE",
 ]

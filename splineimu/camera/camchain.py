@@ -1,4 +1,5 @@
-"""Kalibr camchain files and OpenVINS's ``kalibr_imucam_chain.yaml``: read and write.
+"""Kalibr camchain files and OpenVINS's ``kalibr_imucam_chain.yaml``: read, and their texts
+(written by :mod:`splineimu.io.camera`).
 
 Kalibr (``camchain-imucam.yaml``) holds one mapping per camera, ``cam0``, ``cam1``, ...,
 written by PyYAML with sorted keys, short lists inline (``default_flow_style=None``). Ours
@@ -14,12 +15,11 @@ equidistant), ``intrinsics``, ``distortion_coeffs``, ``resolution``, ``timeshift
 from __future__ import annotations
 
 import re
-from pathlib import Path
 
 from ..errors import ConfigError
 from .model import Camera
 
-__all__ = ["load_camchain", "cameras_from_kalibr", "write_camchain", "write_openvins_imucam_chain",
+__all__ = ["load_camchain", "cameras_from_kalibr", "camchain_text", "openvins_imucam_chain_text",
            "camchain_dict", "cam_overlaps"]
 
 _CAM_KEY = re.compile(r"cam(\d+)")
@@ -129,7 +129,7 @@ def load_camchain(path, defaults=None) -> dict:
     >>> cams["cam0"].distortion_coeffs, cams["cam0"].timeshift_cam_imu_s
     ((-0.1, 0.01, 0.0, 0.0), -0.002)
     """
-    from ..io.yaml import read_yaml
+    from ..yamldoc import read_yaml
 
     doc = read_yaml(path, "camchain")
     return cameras_from_kalibr(doc.data, defaults=defaults, doc=doc)
@@ -189,84 +189,24 @@ def cam_overlaps(cameras, observations) -> list:
             for i in range(len(cams))]
 
 
-def write_camchain(path, cameras, observations=None) -> Path:
-    """Write ``cameras`` as a Kalibr camchain yaml file (atomically).
+def camchain_text(cameras, observations=None) -> str:
+    """The text of a Kalibr camchain yaml file for ``cameras`` (written by
+    :func:`splineimu.io.camera.write_camchain`).
 
     The text is what Kalibr's own writer gives (``yaml.dump(..., default_flow_style=None)``,
-    sorted keys); ``yaml.safe_load`` reads back every value bit for bit.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-    cameras : Camera, sequence of Camera, or dict name -> Camera
-    observations : dict name -> Observations, optional
-        Gives ``cam_overlaps``.
-
-    Returns
-    -------
-    pathlib.Path
-
-    Examples
-    --------
-    >>> import tempfile, pathlib, yaml
-    >>> p = pathlib.Path(tempfile.mkdtemp()) / "camchain.yaml"
-    >>> cam = Camera((458.654, 457.296, 367.215, 248.375), (752, 480), "radtan",
-    ...              (-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05), rate_hz=20.0)
-    >>> _ = write_camchain(p, [cam])
-    >>> yaml.safe_load(p.read_text())["cam0"]["distortion_coeffs"]
-    [-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05]
-    >>> load_camchain(p)["cam0"] == cam
-    True
+    sorted keys); ``yaml.safe_load`` reads back every value bit for bit. ``observations``
+    (dict name -> Observations, optional) gives ``cam_overlaps``.
     """
     import yaml
 
-    from ..io.yaml import write_yaml
-
     data = camchain_dict(cameras, observations)
     # PyYAML's own float representer (not io.yaml's): `1.0e-05`, which every PyYAML reads as a float
-    text = yaml.safe_dump(data, default_flow_style=None, width=2147483647, sort_keys=True)
-    return write_yaml(path, None, text=text)
+    return yaml.safe_dump(data, default_flow_style=None, width=2147483647, sort_keys=True)
 
 
-def write_openvins_imucam_chain(path, cameras, observations=None) -> Path:
-    """Write OpenVINS's ``kalibr_imucam_chain.yaml`` for ``cameras`` (atomically).
-
-    The layout is the one of OpenVINS's ``config/*/kalibr_imucam_chain.yaml`` files: OpenCV's
-    ``%YAML:1.0`` line, then per camera ``T_imu_cam`` (camera to IMU), ``cam_overlaps``,
-    ``camera_model``, ``distortion_coeffs``, ``distortion_model``, ``intrinsics``,
-    ``resolution``, ``rostopic`` and ``timeshift_cam_imu``.
-
-    Notes
-    -----
-    OpenVINS reads ``timeshift_cam_imu`` of cam0 only and has no rolling-shutter model; the
-    file says so in a comment when the cameras differ in time shift or read out by rows.
-    ``distortion_model: none`` is written as radtan with zero coefficients (OpenVINS knows
-    radtan and equidistant only).
-
-    Examples
-    --------
-    >>> import tempfile, pathlib
-    >>> p = pathlib.Path(tempfile.mkdtemp()) / "kalibr_imucam_chain.yaml"
-    >>> _ = write_openvins_imucam_chain(p, [Camera((400.0, 400.0, 320.0, 240.0), (640, 480))])
-    >>> print(p.read_text())  # doctest: +NORMALIZE_WHITESPACE
-    %YAML:1.0
-    <BLANKLINE>
-    cam0:
-      T_imu_cam: #rotation from camera to IMU R_CtoI, position of camera in IMU p_CinI
-        - [1.0, 0.0, 0.0, 0.0]
-        - [0.0, 1.0, 0.0, 0.0]
-        - [0.0, 0.0, 1.0, 0.0]
-        - [0.0, 0.0, 0.0, 1.0]
-      cam_overlaps: []
-      camera_model: pinhole
-      distortion_coeffs: [0.0, 0.0, 0.0, 0.0]
-      distortion_model: radtan
-      intrinsics: [400.0, 400.0, 320.0, 240.0] #fu, fv, cu, cv
-      resolution: [640, 480]
-      rostopic: /cam0/image_raw
-      timeshift_cam_imu: 0.0
-    <BLANKLINE>
-    """
+def openvins_imucam_chain_text(cameras, observations=None) -> str:
+    """The text of OpenVINS's ``kalibr_imucam_chain.yaml`` for ``cameras`` (written by
+    :func:`splineimu.io.camera.write_openvins_imucam_chain`, which describes the layout)."""
     cams = _camera_list(cameras)
     overlaps = cam_overlaps(cams, observations) if observations is not None else [[] for _ in cams]
     lines = ["%YAML:1.0", ""]
@@ -293,9 +233,7 @@ def write_openvins_imucam_chain(path, cameras, observations=None) -> Path:
         lines.append(f"  rostopic: {cam.topic}")
         lines.append(f"  timeshift_cam_imu: {_real(cam.timeshift_cam_imu_s)}")
         lines.append("")
-    from ..io.yaml import write_yaml
-
-    return write_yaml(path, None, text="\n".join(lines) + "\n")
+    return "\n".join(lines) + "\n"
 
 
 def _real(x) -> str:

@@ -12,7 +12,7 @@ Scene-file keys (issue 18)::
     landmarks: {file: points.csv}                                       # id,x,y,z
     landmarks: {random: {count: 1500, shape: shell, radii_m: [5, 30]}}  # or box: margin_m / box_min, box_max
 
-Output files (:func:`write_camera_outputs`)::
+Output files (:func:`splineimu.io.camera.write_camera_outputs`)::
 
     OUT/mav0/<cam>/features.csv     timestamp_ns,landmark_id,u,v
     OUT/landmarks.csv               id,x,y,z
@@ -25,11 +25,10 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..errors import ConfigError
-from .camchain import cameras_from_kalibr, load_camchain, write_camchain, write_openvins_imucam_chain
-from .features import write_features_csv
+from .camchain import cameras_from_kalibr, load_camchain
 from .landmarks import SHAPES, Landmarks
 
-__all__ = ["cameras_from_config", "landmarks_from_config", "write_camera_outputs", "RANDOM_LANDMARK_KEYS"]
+__all__ = ["cameras_from_config", "landmarks_from_config", "RANDOM_LANDMARK_KEYS"]
 
 #: keys of ``landmarks: {random: {...}}``
 RANDOM_LANDMARK_KEYS = ("count", "shape", "center", "radii_m", "box_min", "box_max", "margin_m")
@@ -136,45 +135,3 @@ def landmarks_from_config(value, *, source=None, rng=None, base_dir=None) -> Lan
     count = kw.pop("count")
     shape = kw.pop("shape", SHAPES[0])
     return Landmarks.random(count, shape, source=source, rng=rng, **kw)
-
-
-def write_camera_outputs(out_dir, cameras, observations, landmarks=None) -> list:
-    """Write the camera files of an output folder (see the module notes); returns their paths.
-
-    Parameters
-    ----------
-    out_dir : str or os.PathLike
-        The output folder (e.g. the temporary folder of an ``OutputFolder``).
-    cameras : Camera, sequence of Camera, or dict name -> Camera
-    observations : dict name -> Observations
-    landmarks : Landmarks, optional
-        Written to ``landmarks.csv`` when given.
-
-    Examples
-    --------
-    >>> import tempfile, pathlib
-    >>> from splineimu.camera import Camera, observe
-    >>> from splineimu.scenes import make_scene
-    >>> scene = make_scene("ellipse", duration_s=0.5)
-    >>> cam = Camera((300.0, 300.0, 320.0, 240.0), (640, 480), rate_hz=4.0,
-    ...              cam_T_imu=[[0, -1, 0, 0], [0, 0, -1, 0], [1, 0, 0, 0], [0, 0, 0, 1]])
-    >>> lm = Landmarks.random(100, source=scene, rng=0)
-    >>> out = pathlib.Path(tempfile.mkdtemp())
-    >>> paths = write_camera_outputs(out, [cam], observe(scene, [cam], lm, rng=0), lm)
-    >>> sorted(str(p.relative_to(out)) for p in paths)
-    ['camchain.yaml', 'kalibr_imucam_chain.yaml', 'landmarks.csv', 'mav0/cam0/features.csv']
-    """
-    from .observations import _as_camera_list
-
-    out = Path(out_dir)
-    cams = _as_camera_list(cameras)
-    paths = []
-    for cam in cams:
-        folder = out / "mav0" / cam.name
-        folder.mkdir(parents=True, exist_ok=True)
-        paths.append(write_features_csv(folder / "features.csv", observations[cam.name]))
-    if landmarks is not None:
-        paths.append(landmarks.to_csv(out / "landmarks.csv"))
-    paths.append(write_camchain(out / "camchain.yaml", cams, observations))
-    paths.append(write_openvins_imucam_chain(out / "kalibr_imucam_chain.yaml", cams, observations))
-    return paths

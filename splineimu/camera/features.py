@@ -2,7 +2,8 @@
 
 The header line starts with ``#`` (as EuRoC's csv files); stamps are the frame stamps on the
 camera clock in integer nanoseconds; ``u, v`` are written with Python's shortest round-trip
-``repr``, so reading them back gives the same doubles bit for bit.
+``repr``, so reading them back gives the same doubles bit for bit. The writer is
+:func:`splineimu.io.camera.write_features_csv`.
 """
 
 from __future__ import annotations
@@ -12,48 +13,21 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
-from ..io.files import atomic_write_text
 
-__all__ = ["write_features_csv", "read_features_csv", "FEATURES_HEADER"]
+__all__ = ["features_csv_text", "read_features_csv", "FEATURES_HEADER"]
 
 FEATURES_HEADER = "#timestamp_ns,landmark_id,u,v"
 
 
-def write_features_csv(path, observations) -> Path:
-    """Write one camera's observations to ``path`` (atomically: temporary file, then rename).
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        Target file; its folder must exist.
-    observations : Observations
-        Uses ``t_ns``, ``landmark_id``, ``u`` and ``v`` (the noisy coordinates).
-
-    Returns
-    -------
-    pathlib.Path
-
-    Examples
-    --------
-    >>> import tempfile, pathlib
-    >>> from types import SimpleNamespace
-    >>> obs = SimpleNamespace(t_ns=np.array([0, 0, 50_000_000]), landmark_id=np.array([4, 9, 4]),
-    ...                       u=np.array([10.5, 0.1, 1 / 3]), v=np.array([2.0, 479.75, 7.0]))
-    >>> p = pathlib.Path(tempfile.mkdtemp()) / "features.csv"
-    >>> _ = write_features_csv(p, obs); print(p.read_text(), end="")
-    #timestamp_ns,landmark_id,u,v
-    0,4,10.5,2.0
-    0,9,0.1,479.75
-    50000000,4,0.3333333333333333,7.0
-    >>> bool(read_features_csv(p)["u"][2] == 1 / 3)
-    True
-    """
+def features_csv_text(observations) -> str:
+    """The text of a ``features.csv`` (written by :func:`splineimu.io.camera.write_features_csv`):
+    the header and one row per observation of ``observations`` (``t_ns``, ``landmark_id``, ``u``, ``v``)."""
     t = np.asarray(observations.t_ns, dtype=np.int64).tolist()
     ids = np.asarray(observations.landmark_id, dtype=np.int64).tolist()
     u = np.asarray(observations.u, dtype=np.float64).tolist()
     v = np.asarray(observations.v, dtype=np.float64).tolist()
     body = "".join([f"{a},{b},{c!r},{d!r}\n" for a, b, c, d in zip(t, ids, u, v)])
-    return atomic_write_text(path, FEATURES_HEADER + "\n" + body)
+    return FEATURES_HEADER + "\n" + body
 
 
 def read_features_csv(path) -> dict:

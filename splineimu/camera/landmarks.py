@@ -18,7 +18,6 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ConfigError, InputError
-from ..io.files import atomic_write_text
 
 __all__ = ["Landmarks", "SHAPES"]
 
@@ -141,23 +140,12 @@ class Landmarks:
             raise InputError("empty landmarks file (expected the header `id,x,y,z`)", path=path)
         return cls(np.array(ids, dtype=np.int64), np.array(rows, dtype=np.float64).reshape(-1, 3))
 
-    def to_csv(self, path) -> Path:
-        """Write ``id,x,y,z`` rows atomically; floats are written so they read back bit for bit.
-
-        Examples
-        --------
-        >>> import tempfile, pathlib
-        >>> p = pathlib.Path(tempfile.mkdtemp()) / "landmarks.csv"
-        >>> lm = Landmarks([3], [[0.1, 1 / 3, -2.0]])
-        >>> _ = lm.to_csv(p); print(p.read_text(), end="")
-        id,x,y,z
-        3,0.1,0.3333333333333333,-2.0
-        >>> Landmarks.from_csv(p) == lm
-        True
-        """
+    def csv_text(self) -> str:
+        """The text of a landmarks file: ``id,x,y,z`` rows, floats written so they read back bit for
+        bit (:func:`splineimu.io.camera.write_landmarks_csv` writes it)."""
         lines = ["id,x,y,z"]
         lines += [f"{i},{x!r},{y!r},{z!r}" for i, (x, y, z) in zip(self.id.tolist(), self.position_world.tolist())]
-        return atomic_write_text(path, "\n".join(lines) + "\n")
+        return "\n".join(lines) + "\n"
 
     # ------------------------------------------------------------------ random
     @classmethod

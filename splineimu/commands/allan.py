@@ -45,7 +45,7 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
-    from ..allan import allan_output_paths, analyze_recording, write_allan_outputs
+    from ..api.allan import allan_output_paths, analyze_recording, write_allan_outputs
     from ..errors import ConfigError
     from ..validation import positive_float
 

@@ -79,7 +79,8 @@ def add_arguments(p):
 
 
 def run(args) -> int:
-    from ..calibration import CalibrationOptions, calibrate_file
+    from ..api.calibration import calibrate_file
+    from ..calibration import CalibrationOptions
     from ..errors import ConfigError
     from ._common import say, stderr
 

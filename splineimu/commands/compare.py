@@ -48,8 +48,8 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
+    from ..api.compare import compare_files
     from ..io.files import check_output_file
-    from ..metrics import compare_files
 
     if args.plot is not None:
         check_output_file(args.plot, args.force, inputs=[args.est, args.ref], option="--plot")

@@ -49,7 +49,7 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
-    from ..integrate import dead_reckon
+    from ..api.integrate import dead_reckon
     from ..io.files import check_output_file
 
     check_output_file(args.output, args.force, inputs=[args.imu_csv, args.init])

@@ -62,8 +62,8 @@ def add_arguments(parser) -> None:
 def run(args) -> int:
     from pathlib import Path
 
+    from ..api.preintegration import evaluate_recording
     from ..io.files import check_output_file, write_output_file
-    from ..preintegration import evaluate_recording
 
     folder = Path(args.out_folder)
     inputs = [args.imu_csv, args.stamps, args.imu, args.groundtruth, folder / "imu.yaml"]

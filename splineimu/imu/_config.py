@@ -66,7 +66,7 @@ class ImuConfig:
 
     Build with :meth:`from_dict`, :meth:`from_yaml`, :func:`~splineimu.imu.presets.load_preset`
     or :func:`~splineimu.imu.presets.load_imu_config`; write with :meth:`to_dict` /
-    :meth:`to_yaml` (same key names).
+    :func:`splineimu.io.imu_yaml.write_imu_config` (same key names).
     ``dataclasses.replace`` gives modified copies (e.g. another ``update_rate``).
     """
 
@@ -201,8 +201,6 @@ class ImuConfig:
             File missing or unreadable, yaml syntax error, invalid keys or values; the
             message starts with the file and the line of the key at fault.
         """
-        from ..io.imu_yaml import read_imu_yaml
-
         path = Path(path)
         doc = read_imu_yaml(path)
         try:
@@ -218,7 +216,8 @@ class ImuConfig:
     # ---------------------------------------------------------------- output
 
     def to_dict(self) -> dict:
-        """Plain mapping with the documented keys (numbers, lists): what :meth:`to_yaml` writes.
+        """Plain mapping with the documented keys (numbers, lists): what
+        :func:`~splineimu.io.imu_yaml.write_imu_config` writes.
 
         Vectors with three equal values are written as one number, so Kalibr and OpenVINS
         can read the Kalibr keys.
@@ -243,69 +242,6 @@ class ImuConfig:
             else:
                 out[name] = compact(v)
         return out
-
-    def to_yaml(self, path, header: str | None = None, *, rostopic: str = "/imu0",
-                update_rate: float | None = None) -> Path:
-        """Write the configuration as a Kalibr ``imu.yaml``, atomically (temporary file + rename).
-
-        The file is Kalibr's ``imu.yaml`` (the four noise densities, ``rostopic``,
-        ``update_rate``), followed by the other keys that are set (:meth:`to_dict`). It starts
-        with ``%YAML 1.1`` and ``---`` and writes every number as a float that PyYAML and
-        OpenCV's ``FileStorage`` both read (``2.0e-05``, ``400.0``), so Kalibr, OpenVINS,
-        VINS-Fusion and Kimera read it as it is; :meth:`from_yaml` reads it back equal.
-
-        Parameters
-        ----------
-        path : path-like
-        header : str, optional
-            Comment lines to put first (``#`` is added).
-        rostopic : str, default "/imu0"
-            The IMU's ROS topic (Kalibr requires the key).
-        update_rate : float, optional
-            The sample rate of the data this model describes [Hz], if it differs from
-            :attr:`update_rate` (e.g. the rate actually synthesized). Without either, the key
-            is left out.
-
-        Returns
-        -------
-        Path of the written file.
-
-        Examples
-        --------
-        >>> import tempfile, pathlib
-        >>> cfg = ImuConfig.from_dict({"gyroscope_noise_density": 2e-05, "update_rate": 200})
-        >>> p = cfg.to_yaml(pathlib.Path(tempfile.mkdtemp()) / "imu.yaml", update_rate=400)
-        >>> print("\\n".join(line for line in p.read_text().splitlines() if not line.startswith("#")))
-        %YAML 1.1
-        ---
-        gyroscope_noise_density: 2.0e-05
-        gyroscope_random_walk: 0.0
-        accelerometer_noise_density: 0.0
-        accelerometer_random_walk: 0.0
-        rostopic: /imu0
-        update_rate: 400.0
-        >>> ImuConfig.from_yaml(p) == dataclasses.replace(cfg, update_rate=400.0)
-        True
-        """
-        lines = [
-            "# IMU sensor model (splineimu). Continuous-time Kalibr units:",
-            "#   *_noise_density: gyro rad/s/sqrt(Hz), accel m/s^2/sqrt(Hz)",
-            "#   *_random_walk:   gyro rad/s^2/sqrt(Hz), accel m/s^3/sqrt(Hz)",
-            "#   update_rate: Hz. Other keys: see `python -m pydoc splineimu.imu.config`.",
-        ]
-        if header:
-            lines = ["# " + h if h else "#" for h in header.splitlines()] + lines
-        rest = self.to_dict()
-        data = {key: rest.pop(key) for key in KALIBR_KEYS}
-        data["rostopic"] = str(rostopic)
-        rate = rest.pop("update_rate", None) if update_rate is None else as_rate_hz(update_rate, "update_rate")
-        rest.pop("update_rate", None)
-        if rate is not None:
-            data["update_rate"] = float(rate)
-        data.update(rest)
-        from ..io.imu_yaml import write_imu_yaml
-
-        return write_imu_yaml(path, data, lines)
 
     # ---------------------------------------------------------------- queries
 
@@ -338,3 +274,37 @@ class ImuConfig:
         items = ", ".join(f"{k}={v!r}" for k, v in self.to_dict().items())
         src = f", source={self.source!r}" if self.source else ""
         return f"ImuConfig({items}{src})"
+
+
+def read_imu_yaml(path):
+    """Read an IMU configuration file: a mapping of keys (flat, or a chain ``imu0: {...}``).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+
+    Returns
+    -------
+    splineimu.yamldoc.YamlDoc
+        ``data`` is the mapping; ``line(*keys)`` gives the line of each key.
+
+    Raises
+    ------
+    ConfigError
+        Missing or unreadable file, invalid YAML (with its line), or not a mapping.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "sensor.yaml"
+    >>> _ = p.write_text("%YAML:1.0\\nrate_hz: 200\\ngyroscope_noise_density: 1.6968e-04\\n")
+    >>> doc = read_imu_yaml(p)
+    >>> doc.data["gyroscope_noise_density"], doc.line("rate_hz")
+    (0.00016968, 2)
+    """
+    from ..yamldoc import read_yaml
+
+    doc = read_yaml(path, "IMU configuration file")
+    if not isinstance(doc.data, dict):
+        raise ConfigError(f"expected a mapping of IMU parameters, got {type(doc.data).__name__}", path=doc.name)
+    return doc

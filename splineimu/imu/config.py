@@ -8,7 +8,8 @@ named wherever a file is expected (:func:`load_imu_config`).
 
 The names here come from :mod:`splineimu.imu._config` (the dataclass),
 :mod:`splineimu.imu._config_values` (keys and value checks), :mod:`splineimu.imu.temperature`
-and :mod:`splineimu.imu.presets`; the files are read and written by :mod:`splineimu.io.imu_yaml`.
+and :mod:`splineimu.imu.presets`; the files are read with :mod:`splineimu.yamldoc` and written by
+:func:`splineimu.io.imu_yaml.write_imu_config`.
 
 Keys
 ----
@@ -107,13 +108,3 @@ from .temperature import TemperatureProfile
 
 __all__ = ["ImuConfig", "load_imu_config", "load_preset", "list_presets", "TemperatureProfile",
            "SENSORS", "KALIBR_KEYS", "IGNORED_KEYS"]
-
-
-def write_yaml_atomic(path, data: dict, comment_lines=()):
-    """Dump ``data`` as block-style yaml to ``path`` atomically.
-
-    Kept for callers of this name; it is :func:`splineimu.io.yaml.write_yaml`.
-    """
-    from ..io.yaml import write_yaml
-
-    return write_yaml(path, data, comment_lines)

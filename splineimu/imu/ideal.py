@@ -126,7 +126,7 @@ class Extrinsic:
     @classmethod
     def from_file(cls, path) -> Extrinsic:
         """Read ``body_T_sensor`` from a YAML file (the forms of :meth:`from_dict`)."""
-        from ..io.yaml import read_yaml
+        from ..yamldoc import read_yaml
 
         doc = read_yaml(path, "extrinsic file")
         return cls.from_dict(doc.data, where=doc.name)

@@ -12,7 +12,7 @@ from importlib import resources
 from pathlib import Path
 
 from ..errors import ConfigError
-from ..io.yaml import parse_yaml
+from ..yamldoc import parse_yaml
 from ._config import ImuConfig
 
 __all__ = ["list_presets", "load_preset", "load_imu_config"]

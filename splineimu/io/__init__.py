@@ -5,9 +5,11 @@ heavy; the first use of a name imports its module):
 
 - poses (:mod:`~splineimu.io.poses`): :class:`PoseTrack`, :class:`Gap`, :func:`clean_poses`,
   :func:`find_gaps`, :func:`split_at_gaps`
-- TUM (:mod:`~splineimu.io.tum`): :func:`read_tum`, :func:`write_tum`, :class:`TumWriter`
+- TUM (:mod:`~splineimu.io.tum`): :func:`read_tum`, :func:`write_tum`, :func:`write_scene_tum`,
+  :class:`TumWriter`
 - EuRoC (:mod:`~splineimu.io.euroc`): :func:`read_euroc_groundtruth`, :func:`write_euroc_imu`,
-  :func:`write_euroc_groundtruth`, :class:`EurocImuWriter`, :class:`EurocGroundtruthWriter`
+  :func:`write_euroc_groundtruth`, :class:`EurocImuWriter`, :class:`EurocGroundtruthWriter`,
+  :func:`read_groundtruth`
 - stamps (:mod:`~splineimu.io.timestamps`): :func:`read_timestamps`, :func:`parse_stamps`
 - YAML (:mod:`~splineimu.io.yaml`): :func:`read_yaml`, :func:`parse_yaml`, :func:`dump_yaml`,
   :func:`write_yaml`
@@ -16,6 +18,11 @@ heavy; the first use of a name imports its module):
 - text tables (:mod:`~splineimu.io.tables`): :func:`format_table`, :func:`write_table`,
   :class:`TableWriter`
 - ROS bags (:mod:`~splineimu.io.bag`): :func:`write_bag`
+- calibrations (:mod:`~splineimu.io.calibration_yaml`): :func:`read_calibration_yaml`,
+  :func:`write_calibration_yaml`
+- IMU models (:mod:`~splineimu.io.imu_yaml`): :func:`write_imu_config`
+- cameras (:mod:`~splineimu.io.camera`): :func:`write_camchain`, :func:`write_openvins_imucam_chain`,
+  :func:`write_features_csv`, :func:`write_landmarks_csv`, :func:`write_camera_outputs`
 
 A ``*Writer`` writes a file piece by piece into an :class:`OutputFolder` (records too long
 to hold); the ``write_*`` function of the same format writes one whole file atomically. Both
@@ -35,6 +42,7 @@ _EXPORTS = {
     "read_tum": "tum",
     "write_tum": "tum",
     "TumWriter": "tum",
+    "write_scene_tum": "tum",
     "read_euroc_groundtruth": "euroc",
     "write_euroc_imu": "euroc",
     "write_euroc_groundtruth": "euroc",
@@ -55,6 +63,15 @@ _EXPORTS = {
     "write_table": "tables",
     "TableWriter": "tables",
     "write_bag": "bag",
+    "read_calibration_yaml": "calibration_yaml",
+    "write_camchain": "camera",
+    "write_openvins_imucam_chain": "camera",
+    "write_features_csv": "camera",
+    "write_landmarks_csv": "camera",
+    "write_camera_outputs": "camera",
+    "write_imu_config": "imu_yaml",
+    "read_groundtruth": "euroc",
+    "write_calibration_yaml": "calibration_yaml",
 }
 
 __all__ = sorted(_EXPORTS)

@@ -1,7 +1,7 @@
 """The output folder as a EuRoC / ASL dataset: its paths, its ``sensor.yaml`` files, and
 the sampling mode it records.
 
-Layout written by :func:`splineimu.pipeline.write_output` (the form of the published EuRoC
+Layout written by :func:`splineimu.api.output.write_output` (the form of the published EuRoC
 zips, so that the EuRoC loaders of Kimera, ORB-SLAM3 and others find the files)::
 
     OUT/mav0/imu0/data.csv                          IMU samples

@@ -8,6 +8,9 @@ API uses ``quat_xyzw`` and converts here, at the file boundary.
 
 from __future__ import annotations
 
+from pathlib import Path
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from ..validation import as_quat_xyzw, as_stamps_ns, as_vectors
@@ -15,8 +18,12 @@ from .poses import PoseTrack, track_from_table
 from .tables import TableWriter, write_table
 from .timestamps import _is_integer_text, read_table
 
+if TYPE_CHECKING:
+    from ..groundtruth import GroundTruth
+
 __all__ = [
     "read_euroc_groundtruth",
+    "read_groundtruth",
     "write_euroc_imu",
     "write_euroc_groundtruth",
     "EurocImuWriter",
@@ -285,3 +292,17 @@ class EurocGroundtruthWriter(TableWriter):
     def write_states(self, t_ns, positions, quat_xyzw, velocity_world, bias_gyro, bias_accel) -> None:
         """Append states (arguments as for :func:`write_euroc_groundtruth`)."""
         self.write(*_groundtruth_table(t_ns, positions, quat_xyzw, velocity_world, bias_gyro, bias_accel))
+
+
+def read_groundtruth(path) -> GroundTruth:
+    """Read an EuRoC 17-column ground truth (``state_groundtruth_estimate0/data.csv``) as a
+    :class:`~splineimu.groundtruth.GroundTruth` (interpolated states).
+
+    Raises
+    ------
+    InputError
+        Unreadable file, or fewer columns (no velocity and biases).
+    """
+    from ..groundtruth import GroundTruth
+
+    return GroundTruth.from_track(read_euroc_groundtruth(Path(path)))

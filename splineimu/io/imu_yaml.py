@@ -1,8 +1,8 @@
 """IMU configuration files: Kalibr ``imu.yaml``, Kalibr / OpenVINS chains, EuRoC ``sensor.yaml``.
 
-This module reads and writes the files; the keys and their checks belong to
-:class:`splineimu.imu.config.ImuConfig`, which calls it (:meth:`~splineimu.imu.config.ImuConfig.from_yaml`,
-:meth:`~splineimu.imu.config.ImuConfig.to_yaml`). Everything goes through the one YAML module,
+This module writes the files (:func:`write_imu_config`); the keys and their checks belong to
+:class:`splineimu.imu.config.ImuConfig`, which reads them (:meth:`~splineimu.imu.config.ImuConfig.from_yaml`,
+through :func:`read_imu_yaml`, re-exported here). Everything goes through the one YAML module,
 :mod:`splineimu.io.yaml`: OpenCV's ``%YAML:1.0`` first line and ``!!opencv-matrix`` nodes are
 read, Kalibr's ``1e-4`` is a float, and a file is replaced atomically.
 """
@@ -13,42 +13,12 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import ConfigError
-from .yaml import YamlDoc, float_text, read_yaml, write_yaml
+from ..imu._config import read_imu_yaml
+from ..imu._config_values import KALIBR_KEYS
+from ..validation import as_rate_hz
+from .yaml import float_text, write_yaml
 
-__all__ = ["read_imu_yaml", "write_imu_yaml", "kalibr_imu_chain_text"]
-
-
-def read_imu_yaml(path) -> YamlDoc:
-    """Read an IMU configuration file: a mapping of keys (flat, or a chain ``imu0: {...}``).
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-
-    Returns
-    -------
-    YamlDoc
-        ``data`` is the mapping; ``line(*keys)`` gives the line of each key.
-
-    Raises
-    ------
-    ConfigError
-        Missing or unreadable file, invalid YAML (with its line), or not a mapping.
-
-    Examples
-    --------
-    >>> import tempfile, pathlib
-    >>> p = pathlib.Path(tempfile.mkdtemp()) / "sensor.yaml"
-    >>> _ = p.write_text("%YAML:1.0\\nrate_hz: 200\\ngyroscope_noise_density: 1.6968e-04\\n")
-    >>> doc = read_imu_yaml(p)
-    >>> doc.data["gyroscope_noise_density"], doc.line("rate_hz")
-    (0.00016968, 2)
-    """
-    doc = read_yaml(path, "IMU configuration file")
-    if not isinstance(doc.data, dict):
-        raise ConfigError(f"expected a mapping of IMU parameters, got {type(doc.data).__name__}", path=doc.name)
-    return doc
+__all__ = ["read_imu_yaml", "write_imu_yaml", "write_imu_config", "kalibr_imu_chain_text"]
 
 
 def write_imu_yaml(path, data: dict, comment_lines=()) -> Path:
@@ -73,6 +43,70 @@ def write_imu_yaml(path, data: dict, comment_lines=()) -> Path:
     pathlib.Path
     """
     return write_yaml(path, data, comment_lines, opencv=True)
+
+
+def write_imu_config(config, path, header: str | None = None, *, rostopic: str = "/imu0",
+                     update_rate: float | None = None) -> Path:
+    """Write the configuration as a Kalibr ``imu.yaml``, atomically (temporary file + rename).
+
+    The file is Kalibr's ``imu.yaml`` (the four noise densities, ``rostopic``,
+    ``update_rate``), followed by the other keys that are set (:meth:`ImuConfig.to_dict`). It starts
+    with ``%YAML 1.1`` and ``---`` and writes every number as a float that PyYAML and
+    OpenCV's ``FileStorage`` both read (``2.0e-05``, ``400.0``), so Kalibr, OpenVINS,
+    VINS-Fusion and Kimera read it as it is; :meth:`ImuConfig.from_yaml` reads it back equal.
+
+    Parameters
+    ----------
+    config : ImuConfig
+    path : path-like
+    header : str, optional
+        Comment lines to put first (``#`` is added).
+    rostopic : str, default "/imu0"
+        The IMU's ROS topic (Kalibr requires the key).
+    update_rate : float, optional
+        The sample rate of the data this model describes [Hz], if it differs from
+        :attr:`ImuConfig.update_rate` (e.g. the rate actually synthesized). Without either, the key
+        is left out.
+
+    Returns
+    -------
+    Path of the written file.
+
+    Examples
+    --------
+    >>> import dataclasses, tempfile, pathlib
+    >>> from splineimu.imu.config import ImuConfig
+    >>> cfg = ImuConfig.from_dict({"gyroscope_noise_density": 2e-05, "update_rate": 200})
+    >>> p = write_imu_config(cfg, pathlib.Path(tempfile.mkdtemp()) / "imu.yaml", update_rate=400)
+    >>> print("\\n".join(line for line in p.read_text().splitlines() if not line.startswith("#")))
+    %YAML 1.1
+    ---
+    gyroscope_noise_density: 2.0e-05
+    gyroscope_random_walk: 0.0
+    accelerometer_noise_density: 0.0
+    accelerometer_random_walk: 0.0
+    rostopic: /imu0
+    update_rate: 400.0
+    >>> ImuConfig.from_yaml(p) == dataclasses.replace(cfg, update_rate=400.0)
+    True
+    """
+    lines = [
+        "# IMU sensor model (splineimu). Continuous-time Kalibr units:",
+        "#   *_noise_density: gyro rad/s/sqrt(Hz), accel m/s^2/sqrt(Hz)",
+        "#   *_random_walk:   gyro rad/s^2/sqrt(Hz), accel m/s^3/sqrt(Hz)",
+        "#   update_rate: Hz. Other keys: see `python -m pydoc splineimu.imu.config`.",
+    ]
+    if header:
+        lines = ["# " + h if h else "#" for h in header.splitlines()] + lines
+    rest = config.to_dict()
+    data = {key: rest.pop(key) for key in KALIBR_KEYS}
+    data["rostopic"] = str(rostopic)
+    rate = rest.pop("update_rate", None) if update_rate is None else as_rate_hz(update_rate, "update_rate")
+    rest.pop("update_rate", None)
+    if rate is not None:
+        data["update_rate"] = float(rate)
+    data.update(rest)
+    return write_imu_yaml(path, data, lines)
 
 
 def _rows(key: str, M, indent: str) -> list[str]:

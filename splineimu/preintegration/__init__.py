@@ -5,7 +5,8 @@
 - :mod:`.deltas`: :class:`Deltas`, the exact deltas of two states or a motion source
   (:func:`exact_deltas`), their error (:func:`delta_error`) and :func:`nees`;
 - :mod:`.windows`: a recording preintegrated over windows and compared with its ground truth
-  (:func:`evaluate_windows`, :func:`evaluate_recording`), what ``splineimu preintegrate`` runs.
+  (:func:`evaluate_windows`); :func:`splineimu.api.evaluate_recording` reads one from disk, what
+  ``splineimu preintegrate`` runs.
 """
 
 from __future__ import annotations
@@ -16,7 +17,6 @@ from .windows import (
     KALIBR_KEYS,
     NeesTest,
     WindowResult,
-    evaluate_recording,
     evaluate_windows,
     make_windows,
     noise_densities,
@@ -25,5 +25,5 @@ from .windows import (
 __all__ = [
     "Preintegrator", "Deltas", "ExactDeltas", "exact_deltas", "deltas_from_states", "delta_error", "nees",
     "METHODS", "COVARIANCE_MODELS", "STATE_ORDER", "WindowResult", "NeesTest", "evaluate_windows",
-    "evaluate_recording", "make_windows", "noise_densities", "KALIBR_KEYS",
+    "make_windows", "noise_densities", "KALIBR_KEYS",
 ]

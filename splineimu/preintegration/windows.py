@@ -1,6 +1,6 @@
 """Preintegration of a recording over windows, compared with its ground truth.
 
-:func:`evaluate_recording` is what ``splineimu preintegrate`` runs: it reads an output folder
+:func:`splineimu.api.evaluate_recording` is what ``splineimu preintegrate`` runs: it reads an output folder
 (``mav0/imu0/data.csv``, ``mav0/state_groundtruth_estimate0/data.csv``, optionally ``imu.yaml``), cuts the
 IMU stream into windows (:func:`make_windows`) and calls :func:`evaluate_windows`, which
 preintegrates each window linearized at the ground-truth biases at its start and compares the
@@ -10,7 +10,6 @@ deltas with the exact ones of the ground truth (errors ``truth (-) estimate``, 9
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
@@ -22,7 +21,7 @@ from ..validation import as_stamps_ns, as_vectors, one_of
 from .deltas import Deltas, delta_error, deltas_from_states, nees
 from .preintegrator import Preintegrator
 
-__all__ = ["WindowResult", "NeesTest", "evaluate_windows", "evaluate_recording", "make_windows",
+__all__ = ["WindowResult", "NeesTest", "evaluate_windows", "make_windows",
            "noise_densities", "KALIBR_KEYS"]
 
 #: The four noise densities of an IMU yaml, in the order :class:`Preintegrator` takes them.
@@ -302,65 +301,3 @@ def make_windows(imu_t_ns, gt_t_ns, every=None, stamps_ns=None) -> np.ndarray:
     if idx.size < 2:
         raise ConfigError(f"--every {every} is longer than the {t.size} usable IMU samples")
     return np.stack([t[idx[:-1]], t[idx[1:]]], axis=1)
-
-
-def evaluate_recording(folder, *, imu_csv=None, groundtruth=None, every=None, stamps=None, imu=None,
-                       method: str = "midpoint", covariance: str = "consistent",
-                       gravity=DEFAULT_GRAVITY, sampling: str | None = None) -> WindowResult:
-    """Preintegrate a recording's IMU over windows and compare with its ground truth.
-
-    Parameters
-    ----------
-    folder : path-like
-        Output folder with ``mav0/imu0/data.csv`` and ``mav0/state_groundtruth_estimate0/data.csv``
-        (or the older layout without ``mav0/``).
-    imu_csv, groundtruth : path-like, optional
-        Other files instead of the folder's.
-    every : int, optional
-        Window length in IMU samples (default: about 1 s).
-    stamps : path-like or (S,) int64 array_like, optional
-        Window bounds instead: a file whose first column holds ns (integers) or s (decimals),
-        or the stamps themselves.
-    imu : path-like or str, optional
-        Noise densities (IMU yaml, Kalibr chain or preset name) for the covariance and NEES;
-        default ``folder/imu.yaml`` when it exists, else no NEES.
-    method, covariance, gravity
-        As in :func:`evaluate_windows`.
-    sampling : {"point", "mean"}, optional
-        Default: as recorded with the data (:func:`splineimu.io.dataset.recorded_sampling`).
-
-    Returns
-    -------
-    WindowResult
-
-    Raises
-    ------
-    ConfigError
-        A missing file, or windows that do not fit the data.
-    InputError
-        Unreadable files.
-    """
-    from ..groundtruth import read_groundtruth
-    from ..io.dataset import GROUNDTRUTH_CSV, IMU_CSV, dataset_file, recorded_sampling
-    from ..io.imu_csv import read_imu_csv
-
-    out = Path(folder)
-    imu_path = Path(imu_csv) if imu_csv else dataset_file(out, IMU_CSV)
-    gt_path = Path(groundtruth) if groundtruth else dataset_file(out, GROUNDTRUTH_CSV)
-    for p, what in ((imu_path, "IMU csv"), (gt_path, "ground truth")):
-        if not p.is_file():
-            raise ConfigError(f"{what} not found: {p}")
-    noise_spec = imu if imu else (out / "imu.yaml" if (out / "imu.yaml").is_file() else None)
-    noise = noise_densities(noise_spec) if noise_spec is not None else None
-    if sampling is None:
-        sampling = recorded_sampling(imu_path) if imu_path.is_file() else "point"
-    t_ns, gyro, accel = read_imu_csv(imu_path)
-    gt = read_groundtruth(gt_path)
-    if isinstance(stamps, (str, Path)):
-        from ..io.timestamps import read_timestamps
-
-        stamps = read_timestamps(stamps)
-    windows = make_windows(t_ns, gt.t_ns, every=every, stamps_ns=stamps)
-    return evaluate_windows(t_ns, gyro, accel, gt, windows, noise=noise, method=method, covariance=covariance,
-                            gravity=gravity, noise_source=str(noise_spec) if noise_spec is not None else "",
-                            sampling=sampling)

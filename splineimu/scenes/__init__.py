@@ -20,7 +20,6 @@ Modules
 - :mod:`~splineimu.scenes.tumbling`: ``screw`` (constant body twist), ``flips`` (aggressive
   hand-held-like tumbling);
 - :mod:`~splineimu.scenes.calibration`: ``six-position`` and ``rate-table``;
-- :mod:`~splineimu.scenes.tum`: :func:`write_scene_tum`.
 
 Registry
 --------
@@ -52,12 +51,11 @@ from .base import EXTRA_SCENE_MODULES, SCENES, Param, Scene, make_scene, registe
 from .calibration import CalibrationScene, RateTableScene, SixPositionScene
 from .kinematics import euler_zyx_kinematics
 from .lecture import CircleScene, EllipseScene, StaticScene
-from .tum import write_scene_tum
 from .tumbling import FlipsScene, ScrewScene
 
 __all__ = [
     "SCENES", "EXTRA_SCENE_MODULES", "Param", "Scene", "register_scene", "scene_names",
-    "make_scene", "write_scene_tum", "euler_zyx_kinematics",
+    "make_scene", "euler_zyx_kinematics",
     "EllipseScene", "StaticScene", "CircleScene", "ScrewScene", "FlipsScene",
     "CalibrationScene", "SixPositionScene", "RateTableScene",
 ]

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .deviation import FLICKER_FLOOR, AllanResult
-from .fit import NoiseFit
+from ..allan.deviation import FLICKER_FLOOR, AllanResult
+from ..allan.fit import NoiseFit
 
 __all__ = ["plot_allan"]
 
@@ -78,7 +78,7 @@ def plot_allan(result: AllanResult, fit: NoiseFit | None, path, title: str = "")
     fig.tight_layout()
     import io
 
-    from ..io.files import atomic_write_bytes
+    from .files import atomic_write_bytes
 
     buf = io.BytesIO()
     try:

@@ -15,14 +15,19 @@ from pathlib import Path
 
 import numpy as np
 
+from ..calibration.correct import intrinsics_from_config
+from ..calibration.estimate import calibrate_accel, calibrate_gyro
+from ..calibration.options import CalibrationOptions
+from ..calibration.report import chi2_summary, estimates_table, phase_table
+from ..calibration.result import SensorCalibration
 from ..errors import ConfigError, OutputExistsError
+from ..imu.config import load_imu_config
+from ..io.calibration_yaml import check_calibration_target, write_calibration_yaml
+from ..io.dataset import GROUNDTRUTH_CSV, dataset_file, dataset_root
+from ..io.euroc import read_euroc_groundtruth
+from ..io.files import check_output_file
+from ..io.imu_csv import read_imu_csv
 from ..validation import one_of, positive_float
-from .correct import intrinsics_from_config
-from .estimate import calibrate_accel, calibrate_gyro
-from .files import check_calibration_target, write_calibration_yaml
-from .options import CalibrationOptions
-from .report import chi2_summary, estimates_table, phase_table
-from .result import SensorCalibration
 
 __all__ = ["CalibrationRun", "calibrate_file", "SENSOR_NAMES"]
 
@@ -99,8 +104,6 @@ class CalibrationRun:
 
 
 def _data_folder(csv_path: Path) -> Path:
-    from ..io.dataset import dataset_root
-
     return dataset_root(csv_path)
 
 
@@ -136,20 +139,14 @@ def _table_rates(given, report):
 
 def _truth(truth, folder: Path, sensor: str, t_ns, cal):
     """``(K, b, note)`` of the true sensor model, or ``None``."""
-    from ..imu.config import load_imu_config
-
     path = Path(truth) if truth else folder / "imu.yaml"
     if not truth and not path.is_file():
         return None
     cfg = load_imu_config(str(truth) if truth else str(path))  # `truth` may also name a preset
     K, b = intrinsics_from_config(cfg, sensor)
     note = f"truth: {path}"
-    from ..io.dataset import GROUNDTRUTH_CSV, dataset_file
-
     gt = dataset_file(folder, GROUNDTRUTH_CSV)
     if gt.is_file():
-        from ..io.euroc import read_euroc_groundtruth
-
         try:
             track = read_euroc_groundtruth(gt)
         except Exception:  # noqa: BLE001 - the comparison is optional
@@ -201,8 +198,6 @@ def calibrate_file(path, sensor: str, options: CalibrationOptions | None = None,
     ConfigError, InputError
         Bad options, no table rate for a gyro, unreadable data, too few usable phases.
     """
-    from ..io.imu_csv import read_imu_csv
-
     sensor = SENSOR_NAMES[one_of(sensor, "sensor", tuple(SENSOR_NAMES))]
     options = CalibrationOptions() if options is None else options
     target = None
@@ -210,8 +205,6 @@ def calibrate_file(path, sensor: str, options: CalibrationOptions | None = None,
         if Path(out_dir).exists() and not Path(out_dir).is_dir():
             raise OutputExistsError(f"output path '{out_dir}' exists and is not a folder")
         target = Path(out_dir) / "calibration.yaml"
-        from ..io.files import check_output_file
-
         check_output_file(target, True, inputs=[path, truth])  # never a link, a folder or an input
         check_calibration_target(target, [sensor], force)
     csv = Path(path)

@@ -1,0 +1,146 @@
+"""Comparing trajectories on disk: :func:`compare`, :func:`compare_files`, the job behind ``splineimu compare``.
+
+TUM files are read with evo's own reader (:func:`load_tum`); the metrics are
+:func:`splineimu.metrics.compare` (evo's APE and RPE, see :mod:`splineimu.metrics`).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError
+from ..io.files import staged_path
+from ..io.tum import read_tum
+from ..metrics import CompareResult, _evo, check_compare_options
+from ..metrics import compare as compare_trajectories
+
+__all__ = ["compare", "compare_files", "plot_compare", "load_tum"]
+
+
+def load_tum(path):
+    """Read a TUM file into an evo ``PoseTrajectory3D`` (evo's own reader).
+
+    Raises
+    ------
+    InputError
+        Missing or malformed file.
+    """
+    _, _, _, file_interface = _evo()
+    p = Path(path)
+    if not p.is_file():
+        raise InputError("no such file", path=p)
+    try:
+        traj = file_interface.read_tum_trajectory_file(str(p))
+    except Exception as exc:
+        raise InputError(str(exc) or type(exc).__name__, path=p) from None
+    if not all(np.isfinite(a).all() for a in (traj.timestamps, traj.positions_xyz, traj.orientations_quat_wxyz)):
+        read_tum(p, min_poses=1, repeated_stamps="first")  # names the line and the value
+        raise InputError("holds a value that is not a finite number", path=p)
+    return traj
+
+
+def compare(est, ref, *, metric: str = "ape", pose_relation: str = "trans", align: str = "none",
+            delta: float = 1.0, delta_unit: str = "f", all_pairs: bool = False,
+            t_max_diff: float = 0.01, t_offset: float = 0.0) -> CompareResult:
+    """:func:`splineimu.metrics.compare` (APE and/or RPE by evo) of trajectories or TUM files.
+
+    Parameters
+    ----------
+    est, ref : str, os.PathLike, Trajectory-like or tuple
+        TUM files (read by :func:`load_tum`), or what :func:`splineimu.metrics.compare` takes.
+    metric, pose_relation, align, delta, delta_unit, all_pairs, t_max_diff, t_offset
+        As :func:`splineimu.metrics.compare`.
+
+    Returns
+    -------
+    CompareResult
+
+    Raises
+    ------
+    SplineImuError
+        evo is not installed.
+    InputError
+        Missing or malformed TUM file.
+    ConfigError
+        As :func:`splineimu.metrics.compare`.
+    """
+    _evo()
+    check_compare_options(metric, pose_relation, align, delta, delta_unit, t_max_diff)  # before any file is read
+    est, ref = (load_tum(x) if isinstance(x, (str, Path)) else x for x in (est, ref))
+    return compare_trajectories(est, ref, metric=metric, pose_relation=pose_relation, align=align, delta=delta,
+                                delta_unit=delta_unit, all_pairs=all_pairs, t_max_diff=t_max_diff, t_offset=t_offset)
+
+
+def compare_files(est_path, ref_path, *, plot=None, **options) -> CompareResult:
+    """APE / RPE of an estimated TUM file against a reference TUM file (what ``splineimu compare`` runs).
+
+    Parameters
+    ----------
+    est_path, ref_path : path-like
+        TUM files (note the order: estimate first, unlike evo's command line).
+    plot : path-like, optional
+        Also save :func:`plot_compare`'s figure there (:attr:`CompareResult.plot_path`).
+    **options
+        ``metric``, ``pose_relation``, ``align``, ``delta``, ``delta_unit``, ``all_pairs``,
+        ``t_max_diff``, ``t_offset`` of :func:`compare`.
+
+    Returns
+    -------
+    CompareResult
+
+    Raises
+    ------
+    SplineImuError, InputError, ConfigError
+        As :func:`compare`.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> d = pathlib.Path(tempfile.mkdtemp())
+    >>> _ = (d / "ref.tum").write_text("".join(f"{i}.0 {i} 0 0 0 0 0 1\\n" for i in range(5)))
+    >>> _ = (d / "est.tum").write_text("".join(f"{i}.0 {i} 0.5 0 0 0 0 1\\n" for i in range(5)))
+    >>> r = compare_files(d / "est.tum", d / "ref.tum", metric="both")
+    >>> round(float(r.ape.stats["max"]), 6), r.to_dataframe()["metric"].tolist()
+    (0.5, ['ape', 'rpe'])
+    """
+    res = compare(Path(est_path), Path(ref_path), **options)
+    if plot is not None:
+        res.plot_path = plot_compare(res, plot)
+    return res
+
+
+def plot_compare(result: CompareResult, path) -> Path:
+    """Save a PNG: reference and aligned estimate (x-y), and the error(s) over time.
+
+    The figure is rendered by matplotlib's Agg canvas without pyplot, so no display is needed.
+    """
+    from matplotlib.figure import Figure  # no pyplot: no GUI backend, no global state
+
+    res = result.results
+    fig = Figure(figsize=(6.0 + 5.0 * len(res), 5.0), layout="constrained")
+    axes = fig.subplots(1, 1 + len(res), squeeze=False)[0]
+    ax = axes[0]
+    ax.plot(result.est_positions_aligned[:, 0], result.est_positions_aligned[:, 1], "C0", lw=1.2,
+            label=f"estimate ({'not aligned' if result.align == 'none' else result.align + ' aligned'})")
+    ax.plot(result.ref_positions[:, 0], result.ref_positions[:, 1], "k--", lw=0.8, label="reference")
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.legend(loc="best", fontsize="small")
+    ax.set_title(f"{result.n_associated} associated poses")
+    t0 = result.timestamps_s[0] if result.timestamps_s.size else 0.0
+    for ax, r in zip(axes[1:], res):
+        ax.plot(r.timestamps_s - t0, r.errors, "C1", lw=1.0, label=r.metric.upper())
+        for name, style in (("rmse", "C3-"), ("median", "C2--"), ("mean", "C4:")):
+            ax.axhline(r.stats[name], color=style[:2], ls=style[2:], lw=1.0,
+                       label=f"{name} {r.stats[name]:.6g}")
+        ax.set_xlabel("t (s)")
+        ax.set_ylabel(f"{r.metric.upper()} ({r.unit})")
+        ax.set_title(r.title, fontsize="small")
+        ax.legend(loc="best", fontsize="small")
+    out = Path(path)
+    with staged_path(out) as tmp:  # a failure or an interrupt leaves what was there
+        fig.savefig(tmp, dpi=110, format="png")
+    return out
