@@ -1,18 +1,8 @@
 """The one YAML module: safe reading with file and line for every value, and one writer.
 
-Reading (:func:`read_yaml`, :func:`parse_yaml`, :class:`YamlDoc`) lives in :mod:`splineimu.yamldoc`
-(configuration is read at every layer) and is re-exported here. It is PyYAML's safe loader,
-hardened for files a user hands over:
-
-- OpenCV's ``%YAML:1.0`` first line (EuRoC ``sensor.yaml``, OpenVINS and VINS configs) is
-  accepted, and so is the ``!!opencv-matrix`` tag (read as its mapping ``rows, cols, dt, data``);
-- aliases and nesting are bounded (a "billion laughs" file or 10,000 nested lists is refused
-  with a one-line :class:`~splineimu.errors.ConfigError`, not run until killed);
-- bytes that are not UTF-8 and files over :data:`MAX_YAML_BYTES` are refused with the file,
-  line and problem.
-
-:func:`read_yaml` returns a :class:`YamlDoc`: the data plus the line of every key, so that a
-value checked later is still reported at its file and line (``doc.where("imu", "rate_hz")``).
+Reading (:func:`read_yaml`, :func:`parse_yaml`, :class:`YamlDoc`: PyYAML's safe loader, hardened
+for files a user hands over, with the file and line of every value) lives in
+:mod:`splineimu.yamldoc` (configuration is read at every layer) and is re-exported here.
 
 Writing (:func:`dump_yaml`, :func:`write_yaml`) gives block-style YAML with short lists inline,
 floats written exactly (shortest repr that reads back to the same double, always with a ``.``
