@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from splineimu.spline import knots
+from splineimu.spline import surrogate as sur
 
 RATE_HZ = 200.0
 
@@ -40,8 +41,8 @@ def test_surrogate_power_around_the_cut_off(kind, below, dt):
     motion = 0.5 * np.c_[np.sin(2 * np.pi * 0.3 * t), np.cos(2 * np.pi * 0.5 * t), np.sin(2 * np.pi * 0.2 * t + 1)]
     noise = _noise(kind, t.size, np.random.default_rng(3))
     windows = knots._windows(t, np.ascontiguousarray(motion + noise), np.ones(t.size))
-    first = knots._noise_spectrum(windows[0], 4, dt, np.random.default_rng(7))[1]
-    surrogate = knots._noise_surrogates(windows, 4, dt)[0]
+    first = sur.noise_spectrum(windows[0], 4, dt, np.random.default_rng(7))[1]
+    surrogate = sur.noise_surrogates(windows, 4, dt)[0]
     f = np.fft.rfftfreq(t.size, 1.0 / RATE_HZ)
     fc = first / (t[-1] - t[0])
     above = _band_power(surrogate, f, fc, 2 * fc) / _band_power(noise, f, fc, 2 * fc)

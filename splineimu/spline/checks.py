@@ -29,8 +29,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InputError
-from .knots import motion_limited
 from .report import FitWarning
+from .surrogate import motion_limited
 
 OUTLIER_SIGMAS = 8.0
 OUTLIER_FLOOR_M = 2e-3

@@ -100,6 +100,7 @@ from .banded import DEFAULT_SMOOTHNESS, SPARSE_SMOOTHNESS, difference_coefficien
 from .basis import blending_matrix
 from .report import WARN_ACCEL_M_S2, WARN_GYRO_RAD_S, FitWarning
 from .signals import accumulate, max_rotation_spacing, rotation_increments
+from .surrogate import motion_limited, noise_surrogates
 
 ORDERS = (4, 5, 6)
 N_FOLDS = 4
@@ -128,8 +129,6 @@ WALK_MAX_S = 0.05
 GRAVITY_M_S2 = 9.81
 #: The residual autocorrelation below which noise counts as uncorrelated.
 _ACF_LEVEL = 0.1
-#: Steepest slope of the noise spectrum's continuation below its cut-off (f^-2: white rate).
-_MIN_NOISE_SLOPE = -2.0
 
 
 @cache
@@ -286,81 +285,6 @@ def _best(table, orders):
     return k_best, best[k_best][1], best
 
 
-def motion_limited(X):
-    """True when the top of the band holds motion rather than noise: the power of the second
-    differences falls toward the Nyquist frequency (per octave: [1/8, 1/4] and [1/4, 1/2] of
-    the band at least 3x and 1.5x the top octave), as for exact, low-rate or re-estimated poses.
-    White noise rises there (f^4), coloured and upsampled noise stay within those ratios."""
-    if X.shape[0] < 64:
-        return False
-    d = np.diff(X, 2, axis=0)
-    P = (np.abs(np.fft.rfft(d - d.mean(axis=0), axis=0)) ** 2).sum(axis=1)
-    n = P.size
-    low, mid, top = (P[n * a // 8: n * b // 8].mean() for a, b in ((1, 2), (2, 4), (4, 8)))
-    return bool(low > 3.0 * top and mid > 1.5 * top)
-
-
-def _noise_spectrum(wd, k, dt_cv, rng):
-    """Smoothed periodogram (M, 3) of the pose noise from the fit at the value-optimal spacing,
-    valid from index ``first`` up (None: nowhere), its log-log slope over the octave above, and
-    its level (3,) at ``first`` on that slope.
-
-    The residual of that fit is the pose noise times the fit's residual transfer ``(1 -
-    H(f))^2`` (and motion the fit misses); that transfer is measured by passing a white draw
-    through the same fit, and the residual's periodogram divided by it where it is at least 0.2
-    (from about the fit's cut-off up). The level at ``first`` is the octave's mean detrended by
-    its slope: the bin ``first`` itself, where the noisy measured transfer first reaches 0.2,
-    reads low (the transfer is overestimated there; BROAD orientation: 1.2-3.7x)."""
-    white = rng.normal(size=wd.X.shape)
-    both = np.ascontiguousarray(np.hstack([wd.X, white]))
-    res = both - wd.derivative(k, dt_cv, wd.zero, 1, 0, both)[0]
-    res[wd.w <= 0] = 0.0  # poses left out (dropped glitches) are neither noise nor motion
-    res -= res.mean(axis=0)
-    n = res.shape[0]
-    width = max(8, (n // 2) // 256)
-    kernel = np.ones(width) / width
-
-    def spectrum(x):
-        P = np.abs(np.fft.rfft(x, axis=0)) ** 2
-        return np.column_stack([np.convolve(P[:, j], kernel, mode="same") for j in range(x.shape[1])])
-
-    P = spectrum(res[:, :3])
-    gain = np.mean(spectrum(res[:, 3:]) / np.maximum(spectrum(white), 1e-300), axis=1)
-    ok = np.flatnonzero(gain >= 0.2)
-    if not ok.size:
-        return P, None, np.nan, None
-    first = ok[0]
-    P[first:] /= np.maximum(gain[first:, None], 0.2)
-    band = np.arange(max(first, 1), min(2 * first, P.shape[0] - 1) + 1)
-    slope = np.polyfit(np.log(band), np.log(P[band].sum(axis=1)), 1)[0] if band.size >= 4 else np.nan
-    level = np.mean(P[band] * (first / band)[:, None] ** slope, axis=0) if np.isfinite(slope) else P[first].copy()
-    return P, first, slope, level
-
-
-def _noise_surrogates(windows, k, dt_cv, seed=7, follow=True):
-    """Noise series (N, 3) per window with the spectrum of the pose noise, for propagation
-    through fits: :func:`_noise_spectrum` drawn with random phases, continued below its cut-off
-    from its level there, flat or (``follow``) with the median over the windows of its slope
-    over the octave above, within [:data:`_MIN_NOISE_SLOPE`, 0], for one octave (the spacings
-    up to twice the fit's, where the ladder weighs noise against bias) and flat beyond. White,
-    AR(1) and upsampled noise are flat or nearly so above the cut-off and stay flat; noise
-    rolling off above its own corner (mocap filters) keeps rising below it, but not faster than
-    f^-2 (BROAD orientation against the real gyro: f^-2 from 12 to 40 Hz, f^-3.8 above 31 Hz)."""
-    rngs = [np.random.default_rng(seed) for _ in windows]
-    spectra = [_noise_spectrum(wd, k, dt_cv, rng) for wd, rng in zip(windows, rngs)]
-    slopes = [sl for _, first, sl, _ in spectra if first is not None and np.isfinite(sl)]
-    slope = float(np.clip(np.median(slopes), _MIN_NOISE_SLOPE, 0.0)) if slopes and follow else 0.0
-    out = []
-    for (P, first, _, level), rng, wd in zip(spectra, rngs, windows):
-        if first is not None:
-            f = np.maximum(np.arange(first), first / 2.0)
-            P[:first] = level * (f / first)[:, None] ** slope
-        phase = np.exp(2j * np.pi * rng.random(P.shape))
-        phase[0] = 1.0
-        out.append(np.fft.irfft(np.sqrt(P) * phase, wd.X.shape[0], axis=0))
-    return out
-
-
 def _ladder_errors(windows, k, ladder, noises, r):
     """Predicted r-th derivative error at the spacings ``ladder[1:]`` of a geometric ladder.
 
@@ -469,7 +393,7 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
     # residual is motion)
     follow = not limited
     k_s, dt_s = (k0, dt0) if follow and dt0 > dt_cvb else (k_cv, dt_cvb)
-    noises = _noise_surrogates(windows, k_s, dt_s, follow=follow)
+    noises = noise_surrogates(windows, k_s, dt_s, follow=follow)
     if limited:
         # the residual is mostly motion the fit missed, not noise: look at finer spacings
         noises = [0.1 * nz for nz in noises]
