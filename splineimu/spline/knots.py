@@ -52,7 +52,10 @@ Method
 4. **Low-rate or re-estimated input** (the power of the second differences falls toward the
    Nyquist frequency: the top of the band holds motion, not noise, :func:`motion_limited`) is
    searched at finer spacings, down to below the pose spacing, with a tenth of the surrogate;
-   its ladder is walked only toward finer spacings, down to half the grid's floor.
+   its ladder is walked only toward finer spacings, down to half the grid's floor. If the
+   held-out error grows by less than 5x with blocks twice as long (noise: 1.5-2.8x, exact
+   poses' motion 28-130x), the error at the choice were that error white noise is reported
+   too (``predicted_rms_if_noise``, warning ``prediction_assumes_motion``).
 5. The rotation spacing never exceeds the time in which the input turns by 90 degrees
    (:func:`max_rotation_spacing`): further apart, neighbouring control rotations near the
    opposite turn. Fast smooth rotation is best close to it (the flips scene, 17 rad/s, AR(1)
@@ -459,6 +462,19 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
         # the rotation's own (value) error at the choice: it tilts gravity into the accelerometer
         v0, b0, _ = _ladder_errors(windows, k, np.array([dt / _LADDER, dt]), noises, 0)
         out["value_rms"] = float(np.sqrt(v0[0] + b0[0]))
+    if limited:
+        # the prediction took the top of the band for motion (a tenth of the surrogate). Held-out
+        # blocks twice as long tell: motion's error grows steeply with the gap (exact poses:
+        # 28-130x), noise's barely (1.5-2.8x). Where it may be noise, the derivative's error
+        # at the choice were the held-out error white noise (flips scene at 20 Hz, 0.1 deg
+        # noise: predicted gyro 0.001 rad/s, measured 0.098, this 0.15)
+        num = sum(wd.score(k, dt_cv, wd.folds(2 * block))[0] for wd in windows)
+        growth = num / max(sum(wd.n_scored for wd in windows), 1) / max(table[(k, dt_cv)], 1e-300)
+        if 1.0 / 3.0 < growth < 5.0:
+            rng = np.random.default_rng(11)
+            white = [np.sqrt(table[(k, dt_cv)] / 3.0) * rng.normal(size=wd.X.shape) for wd in windows]
+            vw, _, _ = _ladder_errors(windows, k, np.array([dt / _LADDER, dt]), white, r)
+            out["predicted_rms_if_noise"] = float(np.sqrt(vw[0]))
     return out
 
 
@@ -515,6 +531,12 @@ def prediction_warnings(choice, t):
     for key, name, unit, lim in (("rotation", "gyro", "rad/s", WARN_GYRO_RAD_S),
                                  ("position", "accel", "m/s^2", WARN_ACCEL_M_S2)):
         c = choice[key]
+        if c.get("predicted_rms_if_noise", 0.0) > 3.0 * c["predicted_rms"]:
+            out.append(FitWarning(
+                "prediction_assumes_motion", f"the top octave of the {key} poses was taken for motion (knots "
+                f"{1e3 * c['knot_spacing_s']:.3g} ms follow it, predicted {name} error ~{c['predicted_rms']:.3g} "
+                f"{unit}); if it holds pose noise, the {name} error is up to ~{c['predicted_rms_if_noise']:.3g} "
+                f"{unit} (a coarser knot spacing smooths it)"))
         if c["end_predicted_rms"] > max(3.0 * c["predicted_rms"], lim):
             z = c["end_zone_s"]
             out.append(FitWarning("ends_less_accurate", f"the first and last {z:.3f} s are less accurate ({name} "
