@@ -11,7 +11,7 @@ from splineimu._kernels import fit as _kf
 from splineimu.errors import InputError
 from splineimu.scenes import make_scene
 from splineimu.spline.basis import blending_matrix
-from splineimu.spline.fit import _increments_se3, _increments_so3
+from splineimu.spline.controls import _increments_se3, _increments_so3
 
 ELLIPSE = make_scene("ellipse", duration_s=30.0)
 

@@ -55,11 +55,40 @@ def test_prediction_is_stable_across_noise_seeds():
         preds.append((rep.predicted_gyro_rms_rad_s, rep.predicted_accel_rms_m_s2))
         meas.append(imu_errors(spl, dur))
     ratio = np.array(preds) / np.array(meas)
-    # measured: predicted / measured 0.57 .. 0.96 (gyro), 0.82 .. 1.03 (accel); predictions
-    # within 1.6x of each other (the old spectral floor moved 800x between seeds)
+    # measured: predicted / measured 0.85 .. 1.19 (gyro), 0.85 .. 0.99 (accel); predictions
+    # within 1.3x of each other (the old spectral floor moved 800x between seeds)
     assert np.all((ratio > 1 / 3) & (ratio < 3)), ratio
     preds = np.array(preds)
     assert np.all(preds.max(axis=0) <= 2.0 * preds.min(axis=0)), preds
+
+
+@pytest.mark.parametrize(("scene_name", "scale", "kind", "quantity", "before"), [
+    ("ellipse", 0.01, "upsampled", 0, 0.22),
+    ("ellipse", 0.1, "white", 0, 0.52),
+    ("rate-table", 0.01, "white", 1, 3.35),
+    ("six-position", 0.1, "white", 1, 3.08),
+])
+def test_predictions_of_slow_rotation_at_low_noise(scene_name, scale, kind, quantity, before):
+    """Slow rotation about moving axes with little pose noise (scale x 1 mm / 0.1 deg), 60 s at
+    200 Hz: the gyro's error is mostly the rotation spline's own bias, which the choice's R3
+    proxy (the accumulated increments) underrates 2-11x; the accelerometer's is gravity tilted by
+    the orientation error, whose noise part the sloped continuation of the noise spectrum
+    overstated 3x. Predicted / measured before (``before``) and now (measured 1.01-1.97)."""
+    from splineimu.scenes import make_scene
+
+    dur = 60.0
+    sc = make_scene(scene_name, duration_s=dur)
+    t = np.arange(0.0, dur + 1e-9, 0.005)
+    k = sc.kinematics(t)
+    rng = np.random.default_rng(0)
+    p = k.position_world + noise(kind, t.size, 200.0, 1e-3 * scale, rng)
+    R = k.world_R_body @ lie.so3_exp(noise(kind, t.size, 200.0, np.radians(0.1) * scale, rng))
+    spl, rep = fit(t, p, lie.matrix_to_quat_xyzw(R), return_report=True)
+    te = np.arange(1.0, dur - 1.0, 0.005)
+    err = spl.imu(te)[quantity] - sc.imu(te)[quantity]
+    measured = float(np.sqrt(np.mean(np.sum(err**2, axis=1))))
+    predicted = (rep.predicted_gyro_rms_rad_s, rep.predicted_accel_rms_m_s2)[quantity]
+    assert 0.6 <= predicted / measured <= 2.2, (predicted / measured, before)
 
 
 def test_glitch_is_dropped_with_its_time_range():

@@ -31,7 +31,6 @@ import numpy as np
 from .. import lie
 from .._kernels import fit as _kf
 from .._kernels import gauss_newton as _gn
-from .._kernels import lie as _k_lie
 from ..errors import InputError, SplineImuError
 from .banded import (
     DEFAULT_SMOOTHNESS,
@@ -44,9 +43,11 @@ from .banded import (
 )
 from .basis import blending_matrix
 from .checks import check_rotation_steps, classify_residuals, dropped_warning, input_warnings
+from .controls import _increments_se3, _quat_wxyz, _to_matrices, _to_quats
 from .core import KINDS, Spline
-from .knots import choose_knot_spacing, prediction_warnings
+from .knots import _LADDER, _windows, choose_knot_spacing, prediction_warnings
 from .report import FitReport, FitWarning
+from .signals import rotation_increments
 
 #: Gauss-Newton stops when the largest update is below this (rad, or m for SE3 translation)
 GN_STEP_TOL = 1e-9
@@ -57,6 +58,8 @@ H_REFRESH_STEP = 1e-2
 END_SEGMENTS = 2
 END_ITERATIONS = 6
 END_STEP_TOL = 1e-4
+#: Poses (the middle ones) on which the rotation spline's bias is checked (:func:`_rotation_bias`).
+BIAS_CHECK_POSES = 2000
 #: Prior on the second differences of the rotation increments that involve a control rotation
 #: beyond the data (rad, one standard deviation, against the poses' weights of 1 / noise^2). The
 #: data hardly see those controls (order 6: one 120th of the end pose's rotation), so without it
@@ -115,41 +118,6 @@ def _quasi_interpolant(order):
 def _control_times(t0, dt, n, order):
     """Time at the centre of each control point's support."""
     return t0 + (np.arange(n) - (order - 2) / 2.0) * dt
-
-
-def _quat_wxyz(quat_xyzw):
-    """Unit quaternions (w, x, y, z), C-contiguous, of validated input."""
-    q = np.asarray(quat_xyzw, dtype=np.float64)[:, [3, 0, 1, 2]]
-    return np.ascontiguousarray(q / np.linalg.norm(q, axis=1, keepdims=True))
-
-
-def _to_matrices(q_wxyz):
-    out = np.empty((q_wxyz.shape[0], 3, 3))
-    _k_lie.quat_wxyz_to_mat_batch(q_wxyz, out)
-    return out
-
-
-def _to_quats(R):
-    out = np.empty((R.shape[0], 4))
-    _k_lie.mat_to_quat_wxyz_batch(np.ascontiguousarray(R), out)
-    return out
-
-
-def _increments_so3(Rc):
-    D = np.zeros((Rc.shape[0], 3))
-    D[1:] = lie.so3_log(np.matmul(np.swapaxes(Rc[:-1], 1, 2), Rc[1:]))
-    return D
-
-
-def _increments_se3(Rc, pc):
-    n = Rc.shape[0]
-    T = np.zeros((n - 1, 4, 4))
-    T[:, :3, :3] = np.matmul(np.swapaxes(Rc[:-1], 1, 2), Rc[1:])
-    T[:, :3, 3] = np.einsum("nji,nj->ni", Rc[:-1], pc[1:] - pc[:-1])
-    T[:, 3, 3] = 1.0
-    D = np.zeros((n, 6))
-    D[1:] = lie.se3_log(T)
-    return D
 
 
 class _Problem:
@@ -544,6 +512,8 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
     keep = ~dropped
     ep = np.linalg.norm(res_pos[keep], axis=1)
     ea = np.linalg.norm(res_rot[keep], axis=1)
+    if choice is not None and kind == "split":
+        _rotation_bias(choice, probs[0], max_iter)
     pred_g = choice["predicted_gyro_rms_rad_s"] if choice else None
     pred_a = choice["predicted_accel_rms_m_s2"] if choice else None
     warnings = (prediction_warnings(choice, t) + gap_warnings + warnings
@@ -565,6 +535,40 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
     )
     spl.fit_report = report
     return (spl, report) if return_report else spl
+
+
+def _rotation_bias(choice, rot, max_iter):
+    """Put the rotation spline's own bias into the predicted gyro error. The choice measures bias
+    on the accumulated increments (an R3 spline); the cumulative SO3 spline of turns about moving
+    axes has more (lecture ellipse at 0.5-1 s knots: 2-11x, predicted 0.2-0.7x the measured
+    error). The gyro's change from a fit a ladder rung finer, on SO3 and on the increments, holds
+    the same noise change: the excess of the first over the second is added to the bias. Both on
+    the middle :data:`BIAS_CHECK_POSES` poses (at least 40 knot spacings)."""
+    c = choice["rotation"]
+    k, dt = rot.order, c["knot_spacing_s"]
+    n = min(rot.t.size, max(BIAS_CHECK_POSES, int(40 * dt / np.median(np.diff(rot.t)))))
+    sl = slice((rot.t.size - n) // 2, (rot.t.size - n) // 2 + n)
+    t, w = rot.t[sl], rot.w[sl]
+    (wd,) = _windows(t, rotation_increments(rot.R[sl]), w, True)
+    idx = wd.scored_index
+    if idx.size < 2 or (t[-1] - t[0]) / dt < 3 * k:
+        return
+    gyro = []
+    for h in (dt, dt / _LADDER):
+        lay = layout(t[0], t[-1], h, k)
+        sub = _Problem(t, rot.P[sl], rot.R[sl], rot.q[sl], w, k, *lay[:3], rot.smoothness, rot.w_rot, rot.w_pos)
+        Rc, _, _, conv = sub.solve_rotations(sub.initial_rotations(), max_iter=max_iter)
+        if not conv:
+            return
+        gyro.append(Spline(lay[0], lay[1], np.zeros((Rc.shape[0], 3)), Rc, "split", k).angular_velocity_body(t[idx]))
+    d_r3 = wd.derivative(k, dt, wd.zero, 1, 1)[0][idx]  # a copy: the next call reuses the buffer
+    d_r3 -= wd.derivative(k, dt / _LADDER, wd.zero, 1, 1)[0][idx]
+    excess = float(np.mean(np.sum((gyro[0] - gyro[1]) ** 2, axis=1)) - np.mean(np.sum(d_r3**2, axis=1)))
+    pred = c["predicted_rms"]
+    if excess > 0:
+        new = float(np.sqrt(pred**2 + excess))
+        c["end_predicted_rms"] = float(np.sqrt(c["end_predicted_rms"] ** 2 - pred**2 + new**2))
+        c["predicted_rms"] = choice["predicted_gyro_rms_rad_s"] = new
 
 
 def _solve(probs, Rc, kind, max_iter, tick, smoothness):

@@ -459,8 +459,12 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
         "candidates": rows,
     }
     if r == 1:
-        # the rotation's own (value) error at the choice: it tilts gravity into the accelerometer
-        v0, b0, _ = _ladder_errors(windows, k, np.array([dt / _LADDER, dt]), noises, 0)
+        # the rotation's own (value) error at the choice: it tilts gravity into the accelerometer.
+        # The value weighs the noise far below the cut-off alike, where the continuation's slope
+        # (read where motion the fit misses adds to the residual) overstated white noise 3x (rate
+        # table, six-position scenes); it is continued flat here
+        flat = noise_surrogates(windows, k_s, dt_s, follow=False) if follow else noises
+        v0, b0, _ = _ladder_errors(windows, k, np.array([dt / _LADDER, dt]), flat, 0)
         out["value_rms"] = float(np.sqrt(v0[0] + b0[0]))
     if limited:
         # the prediction took the top of the band for motion (a tenth of the surrogate). Held-out
