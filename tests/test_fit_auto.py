@@ -91,6 +91,26 @@ def test_predictions_of_slow_rotation_at_low_noise(scene_name, scale, kind, quan
     assert 0.6 <= predicted / measured <= 2.2, (predicted / measured, before)
 
 
+def test_slow_rotation_at_a_high_rate_checks_its_bias_on_one_window():
+    """60 s of the circle scene at 500 Hz (30 001 poses, rotation knots 2 s): the rotation bias
+    check wants 40 knots (40 000 poses) and takes at most the cross-validation's window
+    (MAX_CV_POSES); it had asked for one window of 40 000 and stopped with a ValueError.
+    Measured predicted / measured gyro 1.40."""
+    from splineimu.scenes import make_scene
+
+    dur = 60.0
+    sc = make_scene("circle", duration_s=dur)
+    t = np.arange(0.0, dur + 1e-9, 0.002)
+    k = sc.kinematics(t)
+    rng = np.random.default_rng(0)
+    p = k.position_world + noise("white", t.size, 500.0, 1e-3, rng)
+    R = k.world_R_body @ lie.so3_exp(noise("white", t.size, 500.0, np.radians(0.1), rng))
+    spl, rep = fit(t, p, lie.matrix_to_quat_xyzw(R), return_report=True)
+    te = np.arange(1.0, dur - 1.0, 0.005)
+    measured = float(np.sqrt(np.mean(np.sum((spl.imu(te)[0] - sc.imu(te)[0]) ** 2, axis=1))))
+    assert 0.6 <= rep.predicted_gyro_rms_rad_s / measured <= 2.2, (rep.predicted_gyro_rms_rad_s, measured)
+
+
 def test_glitch_is_dropped_with_its_time_range():
     dur = 30.0
     t, p, q = poses("glitch", dur, seed=1)

@@ -45,7 +45,7 @@ from .basis import blending_matrix
 from .checks import check_rotation_steps, classify_residuals, dropped_warning, input_warnings
 from .controls import _increments_se3, _quat_wxyz, _to_matrices, _to_quats
 from .core import KINDS, Spline
-from .knots import _LADDER, _windows, choose_knot_spacing, prediction_warnings
+from .knots import _LADDER, MAX_CV_POSES, _windows, choose_knot_spacing, prediction_warnings
 from .report import FitReport, FitWarning
 from .signals import rotation_increments
 
@@ -546,7 +546,7 @@ def _rotation_bias(choice, rot, max_iter):
     the middle :data:`BIAS_CHECK_POSES` poses (at least 40 knot spacings)."""
     c = choice["rotation"]
     k, dt = rot.order, c["knot_spacing_s"]
-    n = min(rot.t.size, max(BIAS_CHECK_POSES, int(40 * dt / np.median(np.diff(rot.t)))))
+    n = min(rot.t.size, MAX_CV_POSES, max(BIAS_CHECK_POSES, int(40 * dt / np.median(np.diff(rot.t)))))
     sl = slice((rot.t.size - n) // 2, (rot.t.size - n) // 2 + n)
     t, w = rot.t[sl], rot.w[sl]
     (wd,) = _windows(t, rotation_increments(rot.R[sl]), w, True)
