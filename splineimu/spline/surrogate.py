@@ -56,7 +56,9 @@ def noise_spectrum(wd, k, dt_cv, rng):
     first = ok[0]
     P[first:] /= np.maximum(gain[first:, None], 0.2)
     band = np.arange(max(first, 1), min(2 * first, P.shape[0] - 1) + 1)
-    slope = np.polyfit(np.log(band), np.log(P[band].sum(axis=1)), 1)[0] if band.size >= 4 else np.nan
+    power = P[band].sum(axis=1)
+    # exact input (a static pose) leaves no residual at all: no slope to read
+    slope = np.polyfit(np.log(band), np.log(power), 1)[0] if band.size >= 4 and np.all(power > 0) else np.nan
     level = np.mean(P[band] * (first / band)[:, None] ** slope, axis=0) if np.isfinite(slope) else P[first].copy()
     return P, first, slope, level
 
