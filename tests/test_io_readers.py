@@ -481,3 +481,19 @@ def test_imu_csv_parallel_parts_equal_one_pass(tmp_path, monkeypatch):
     p.write_text("\n".join(text) + "\n")
     with pytest.raises(InputError, match=r"imu\.csv:4801: .*non-numeric"):
         imu_csv.read_imu_table(p)
+
+
+def test_imu_csv_stamp_beyond_int64_is_named_without_a_pandas_warning(tmp_path):
+    """A stamp like 1e30 made pandas' fast parser print 'invalid value encountered in cast'
+    before the exact parser named the line; the cast is now a failure of the fast path."""
+    import warnings
+
+    from splineimu.io.imu_csv import read_imu_csv
+
+    p = tmp_path / "imu.csv"
+    p.write_text("#t,gx,gy,gz,ax,ay,az\n1000000000,0,0,0,0,0,9.8\n1e30,0,0,0,0,0,9.8\n3000000000,0,0,0,0,0,9.8\n")
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        with pytest.raises(InputError, match=r"imu\.csv:3: time stamp must be integer nanoseconds"):
+            read_imu_csv(p)
+    assert not [w for w in seen if issubclass(w.category, RuntimeWarning)], [str(w.message) for w in seen]

@@ -158,7 +158,10 @@ def _read_imu_table(path):
     from .sniff import check_ns_spacing
 
     try:
-        t_ns, vals = _read_fast(path)
+        with warnings.catch_warnings():
+            # a lossy cast in pandas (a stamp beyond int64) is a failure too, not a printed warning
+            warnings.simplefilter("error", RuntimeWarning)
+            t_ns, vals = _read_fast(path)
     except Exception:  # noqa: BLE001 - any failure: the exact parser finds and names the line
         t_ns = vals = None
     lines = None
