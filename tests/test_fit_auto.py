@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from fit_scenes import best_fixed, imu_errors, noise, poses
+from fit_scenes import best_fixed, imu_errors, noise, poses, scene_poses
 
 from splineimu import fit, lie
 from splineimu.errors import InputError
@@ -74,15 +74,8 @@ def test_predictions_of_slow_rotation_at_low_noise(scene_name, scale, kind, quan
     proxy (the accumulated increments) underrates 2-11x; the accelerometer's is gravity tilted by
     the orientation error, whose noise part the sloped continuation of the noise spectrum
     overstated 3x. Predicted / measured before (``before``) and now (measured 1.01-1.97)."""
-    from splineimu.scenes import make_scene
-
     dur = 60.0
-    sc = make_scene(scene_name, duration_s=dur)
-    t = np.arange(0.0, dur + 1e-9, 0.005)
-    k = sc.kinematics(t)
-    rng = np.random.default_rng(0)
-    p = k.position_world + noise(kind, t.size, 200.0, 1e-3 * scale, rng)
-    R = k.world_R_body @ lie.so3_exp(noise(kind, t.size, 200.0, np.radians(0.1) * scale, rng))
+    sc, t, p, R = scene_poses(scene_name, kind, dur, scale=scale)
     spl, rep = fit(t, p, lie.matrix_to_quat_xyzw(R), return_report=True)
     te = np.arange(1.0, dur - 1.0, 0.005)
     err = spl.imu(te)[quantity] - sc.imu(te)[quantity]
@@ -96,15 +89,8 @@ def test_slow_rotation_at_a_high_rate_checks_its_bias_on_one_window():
     check wants 40 knots (40 000 poses) and takes at most the cross-validation's window
     (MAX_CV_POSES); it had asked for one window of 40 000 and stopped with a ValueError.
     Measured predicted / measured gyro 1.40."""
-    from splineimu.scenes import make_scene
-
     dur = 60.0
-    sc = make_scene("circle", duration_s=dur)
-    t = np.arange(0.0, dur + 1e-9, 0.002)
-    k = sc.kinematics(t)
-    rng = np.random.default_rng(0)
-    p = k.position_world + noise("white", t.size, 500.0, 1e-3, rng)
-    R = k.world_R_body @ lie.so3_exp(noise("white", t.size, 500.0, np.radians(0.1), rng))
+    sc, t, p, R = scene_poses("circle", "white", dur, rate_hz=500.0)
     spl, rep = fit(t, p, lie.matrix_to_quat_xyzw(R), return_report=True)
     te = np.arange(1.0, dur - 1.0, 0.005)
     measured = float(np.sqrt(np.mean(np.sum((spl.imu(te)[0] - sc.imu(te)[0]) ** 2, axis=1))))
@@ -135,12 +121,8 @@ def test_glitch_in_fast_motion_is_dropped_and_leaves_the_choice_alone():
     0.237 against 0.152 without the glitch. Now the 8 poses are dropped, the choice is made again
     without them, and the spline equals the one from the clean poses."""
     dur = 60.0
-    sc = make_scene("flips", duration_s=dur)
-    t = np.arange(0.0, dur + 1e-9, 0.005)
-    k = sc.kinematics(t)
-    rng = np.random.default_rng(0)
-    p = k.position_world + noise("white", t.size, 200.0, 1e-3, rng)
-    q = lie.matrix_to_quat_xyzw(k.world_R_body @ lie.so3_exp(noise("white", t.size, 200.0, np.radians(0.1), rng)))
+    sc, t, p, R = scene_poses("flips", "white", dur)
+    q = lie.matrix_to_quat_xyzw(R)
     glitch = (t >= 30.0) & (t < 30.04)
     pg = p.copy()
     pg[glitch] += [0.05, 0.0, 0.0]
@@ -333,17 +315,11 @@ def test_fast_smooth_rotation_walks_to_its_turn_limit():
     converges with its control rotations turning 70-80 degrees (the prior on those beyond the
     data). Measured: 43.5 ms (walk held) -> 54.2 ms (60-degree limit) -> 80 ms (order 5); gyro
     1.6x -> 1.35x -> 1.11x the best fixed setting (order 6 at 55, 70, 80 ms)."""
-    from splineimu.scenes import make_scene
     from splineimu.spline.knots import WALK_MAX_S
     from splineimu.spline.signals import max_rotation_spacing
 
     dur = 20.0
-    sc = make_scene("flips", duration_s=dur)
-    t = np.arange(0.0, dur + 1e-9, 0.005)
-    k = sc.kinematics(t)
-    rng = np.random.default_rng(0)
-    p = k.position_world + noise("ar1", t.size, 200.0, 1e-3, rng)
-    R = k.world_R_body @ lie.so3_exp(noise("ar1", t.size, 200.0, np.radians(0.1), rng))
+    sc, t, p, R = scene_poses("flips", "ar1", dur)
     q = lie.matrix_to_quat_xyzw(R)
     te = np.arange(1.0, dur - 1.0, 0.005)
     g0 = sc.imu(te)[0]
