@@ -513,7 +513,7 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
     ep = np.linalg.norm(res_pos[keep], axis=1)
     ea = np.linalg.norm(res_rot[keep], axis=1)
     if choice is not None and kind == "split":
-        _rotation_bias(choice, probs[0], max_iter)
+        _rotation_bias(choice, probs[0], Rc, max_iter)
     pred_g = choice["predicted_gyro_rms_rad_s"] if choice else None
     pred_a = choice["predicted_accel_rms_m_s2"] if choice else None
     warnings = (prediction_warnings(choice, t) + gap_warnings + warnings
@@ -537,7 +537,7 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
     return (spl, report) if return_report else spl
 
 
-def _rotation_bias(choice, rot, max_iter):
+def _rotation_bias(choice, rot, Rc_fit, max_iter):
     """Put the rotation spline's own bias into the predicted gyro error. The choice measures bias
     on the accumulated increments (an R3 spline); the cumulative SO3 spline of turns about moving
     axes has more (lecture ellipse at 0.5-1 s knots: 2-11x, predicted 0.2-0.7x the measured
@@ -556,10 +556,13 @@ def _rotation_bias(choice, rot, max_iter):
     gyro = []
     for h in (dt, dt / _LADDER):
         lay = layout(t[0], t[-1], h, k)
-        sub = _Problem(t, rot.P[sl], rot.R[sl], rot.q[sl], w, k, *lay[:3], rot.smoothness, rot.w_rot, rot.w_pos)
-        Rc, _, _, conv = sub.solve_rotations(sub.initial_rotations(), max_iter=max_iter)
-        if not conv:
-            return
+        if n == rot.t.size and lay[:3] == (rot.t0, rot.dt, rot.nseg):
+            Rc = Rc_fit  # the check covers every pose: this is the fit itself
+        else:
+            sub = _Problem(t, rot.P[sl], rot.R[sl], rot.q[sl], w, k, *lay[:3], rot.smoothness, rot.w_rot, rot.w_pos)
+            Rc, _, _, conv = sub.solve_rotations(sub.initial_rotations(), max_iter=max_iter)
+            if not conv:
+                return
         gyro.append(Spline(lay[0], lay[1], np.zeros((Rc.shape[0], 3)), Rc, "split", k).angular_velocity_body(t[idx]))
     d_r3 = wd.derivative(k, dt, wd.zero, 1, 1)[0][idx]  # a copy: the next call reuses the buffer
     d_r3 -= wd.derivative(k, dt / _LADDER, wd.zero, 1, 1)[0][idx]

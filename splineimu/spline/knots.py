@@ -396,7 +396,9 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
     # residual is motion)
     follow = not limited
     k_s, dt_s = (k0, dt0) if follow and dt0 > dt_cvb else (k_cv, dt_cvb)
-    noises = noise_surrogates(windows, k_s, dt_s, follow=follow)
+    want_flat = r == 1 and follow  # the rotation's value error (below) takes the flat continuation
+    drawn = noise_surrogates(windows, k_s, dt_s, follow=follow, also_flat=want_flat)
+    noises, flat = drawn if want_flat else (drawn, None)
     if limited:
         # the residual is mostly motion the fit missed, not noise: look at finer spacings
         noises = [0.1 * nz for nz in noises]
@@ -463,8 +465,7 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
         # The value weighs the noise far below the cut-off alike, where the continuation's slope
         # (read where motion the fit misses adds to the residual) overstated white noise 3x (rate
         # table, six-position scenes); it is continued flat here
-        flat = noise_surrogates(windows, k_s, dt_s, follow=False) if follow else noises
-        v0, b0, _ = _ladder_errors(windows, k, np.array([dt / _LADDER, dt]), flat, 0)
+        v0, b0, _ = _ladder_errors(windows, k, np.array([dt / _LADDER, dt]), noises if flat is None else flat, 0)
         out["value_rms"] = float(np.sqrt(v0[0] + b0[0]))
     if limited:
         # the prediction took the top of the band for motion (a tenth of the surrogate). Held-out

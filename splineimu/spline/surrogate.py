@@ -4,6 +4,8 @@ residual, and noise series drawn with that spectrum to propagate through fits.""
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 
 #: Steepest slope of the noise spectrum's continuation below its cut-off (f^-2: white rate).
@@ -63,7 +65,7 @@ def noise_spectrum(wd, k, dt_cv, rng):
     return P, first, slope, level
 
 
-def noise_surrogates(windows, k, dt_cv, seed=7, follow=True):
+def noise_surrogates(windows, k, dt_cv, seed=7, follow=True, also_flat=False):
     """Noise series (N, 3) per window with the spectrum of the pose noise, for propagation
     through fits: :func:`noise_spectrum` drawn with random phases, continued below its cut-off
     from its level there, flat or (``follow``) with the median over the windows of its slope
@@ -71,17 +73,24 @@ def noise_surrogates(windows, k, dt_cv, seed=7, follow=True):
     up to twice the fit's, where the ladder weighs noise against bias) and flat beyond. White,
     AR(1) and upsampled noise are flat or nearly so above the cut-off and stay flat; noise
     rolling off above its own corner (mocap filters) keeps rising below it, but not faster than
-    f^-2 (BROAD orientation against the real gyro: f^-2 from 12 to 40 Hz, f^-3.8 above 31 Hz)."""
+    f^-2 (BROAD orientation against the real gyro: f^-2 from 12 to 40 Hz, f^-3.8 above 31 Hz).
+    With ``also_flat``, ``(series, flat series)``: the same spectra and phases continued flat."""
     rngs = [np.random.default_rng(seed) for _ in windows]
     spectra = [noise_spectrum(wd, k, dt_cv, rng) for wd, rng in zip(windows, rngs)]
     slopes = [sl for _, first, sl, _ in spectra if first is not None and np.isfinite(sl)]
     slope = float(np.clip(np.median(slopes), _MIN_NOISE_SLOPE, 0.0)) if slopes and follow else 0.0
-    out = []
-    for (P, first, _, level), rng, wd in zip(spectra, rngs, windows):
-        if first is not None:
-            f = np.maximum(np.arange(first), first / 2.0)
-            P[:first] = level * (f / first)[:, None] ** slope
-        phase = np.exp(2j * np.pi * rng.random(P.shape))
-        phase[0] = 1.0
-        out.append(np.fft.irfft(np.sqrt(P) * phase, wd.X.shape[0], axis=0))
-    return out
+
+    def draw(slope):
+        out = []
+        for (P, first, _, level), rng, wd in zip(spectra, rngs, windows):
+            P = P.copy()
+            if first is not None:
+                f = np.maximum(np.arange(first), first / 2.0)
+                P[:first] = level * (f / first)[:, None] ** slope
+            rng = copy.deepcopy(rng)  # every draw: the same phases
+            phase = np.exp(2j * np.pi * rng.random(P.shape))
+            phase[0] = 1.0
+            out.append(np.fft.irfft(np.sqrt(P) * phase, wd.X.shape[0], axis=0))
+        return out
+
+    return (draw(slope), draw(0.0)) if also_flat else draw(slope)
