@@ -107,28 +107,31 @@ def _running_median(x, width):
     return out[h:h + x.size]
 
 
-def _extrapolation_errors(t, Y):
+def _extrapolation_errors(t, Y, norm=False):
     """Y_i less its linear extrapolation from i-2, i-1 (forward) and from i+1, i+2 (backward),
-    (N, d) each; zero where the three poses span a gap (more than 3 median spacings between two
-    of them)."""
-    fwd = np.zeros(Y.shape)
-    bwd = np.zeros(Y.shape)
+    (N, d) each, or with ``norm`` their lengths (N,); zero where the three poses span a gap (more
+    than 3 median spacings between two of them)."""
+    shape = (t.size,) if norm else Y.shape
+    fwd, bwd = np.zeros(shape), np.zeros(shape)
     if t.size < 3:
         return fwd, bwd
     dt = np.diff(t)
     ok = (np.maximum(dt[1:], dt[:-1]) <= 3.0 * np.median(dt))[:, None]  # poses i, i+1, i+2 close together
-    a = dt[1:] / dt[:-1]
-    fwd[2:] = np.where(ok, Y[2:] - Y[1:-1] - a[:, None] * (Y[1:-1] - Y[:-2]), 0.0)
-    b = dt[:-1] / dt[1:]
-    bwd[:-2] = np.where(ok, Y[:-2] - Y[1:-1] - b[:, None] * (Y[1:-1] - Y[2:]), 0.0)
+
+    def error(x0, x1, x2, r):
+        v = np.where(ok, x0 - x1 - r[:, None] * (x1 - x2), 0.0)
+        return np.linalg.norm(v, axis=1) if norm else v
+
+    fwd[2:] = error(Y[2:], Y[1:-1], Y[:-2], dt[1:] / dt[:-1])
+    bwd[:-2] = error(Y[:-2], Y[1:-1], Y[2:], dt[:-1] / dt[1:])
     return fwd, bwd
 
 
-def _inner_glitch(e, jumps, fwd, bwd, jmin, a, b):
+def _inner_glitch(t, Y, e, fwd, bwd, jmin, a, b):
     """(first, last) pose of a glitch inside the run [a, b) of large residuals ``e``, or None: a
     jump in before the largest residual and a jump out after it (as large as half of it and as
     the local jump level ``jmin``), by the same offset (the poses between moved together: their
-    forward and backward extrapolation errors, ``jumps``, agree within half their size)."""
+    forward and backward extrapolation errors agree within half their size)."""
     top = float(e[a:b].max())
     peak = a + int(np.argmax(e[a:b]))
     ins = a + np.flatnonzero(fwd[a:peak + 1] > np.maximum(0.5 * top, jmin[a:peak + 1]))
@@ -136,7 +139,9 @@ def _inner_glitch(e, jumps, fwd, bwd, jmin, a, b):
     if not (ins.size and outs.size):
         return None
     i, k = int(ins[0]), int(outs[-1])
-    if np.linalg.norm(jumps[0][i] - jumps[1][k]) > 0.5 * min(fwd[i], bwd[k]):
+    jump_in = _extrapolation_errors(t[i - 2:i + 1], Y[i - 2:i + 1])[0][2]  # the vectors of fwd[i], bwd[k]
+    jump_out = _extrapolation_errors(t[k:k + 3], Y[k:k + 3])[1][0]
+    if np.linalg.norm(jump_in - jump_out) > 0.5 * min(fwd[i], bwd[k]):
         return None
     return i, k
 
@@ -171,24 +176,23 @@ def classify_residuals(t, P, theta, res_pos, res_rot, w):
         c = (e > OUTLIER_SIGMAS * sigma) & (e > floor) & (w > 0)
         cand |= c
         score = np.maximum(score, e / np.maximum(OUTLIER_SIGMAS * sigma, floor))
-        jumps = _extrapolation_errors(t, Y)
-        fwd, bwd = (np.linalg.norm(j, axis=1) for j in jumps)
+        fwd, bwd = _extrapolation_errors(t, Y, norm=True)
         # jumps are judged against the local size of such extrapolation errors (fast motion has
         # larger ones), by the same number of robust sigmas
         jmin = np.maximum(OUTLIER_SIGMAS * _running_median(fwd, width) / 1.538, floor)
-        parts.append((e, jumps, fwd, bwd, jmin, warn))
+        parts.append((Y, e, fwd, bwd, jmin, warn))
     for a, b in _runs(cand):
         t0, t1 = float(t[a]), float(t[b - 1])
         jin = jout = inside = big = False
         core = None  # (first, last) pose of a glitch whose jumps lie inside the run
-        for e, jumps, fwd, bwd, jmin, warn in parts:
+        for Y, e, fwd, bwd, jmin, warn in parts:
             top = float(e[a:b].max())
             jin |= a == 0 or bool(fwd[a] > max(0.5 * top, jmin[a]))
             jout |= b == n or bool(bwd[b - 1] > max(0.5 * top, jmin[b - 1]))
             inside |= bool(np.any(fwd[a:b + 1] > np.maximum(0.25 * top, jmin[a:b + 1])))
             big |= top >= warn
             if core is None and 0 < a and b < n and top >= warn:
-                core = _inner_glitch(e, jumps, fwd, bwd, jmin, a, b)
+                core = _inner_glitch(t, Y, e, fwd, bwd, jmin, a, b)
         if not (jin and jout) and core is not None:
             # the fit spread a large glitch's residual onto valid neighbours (fast motion, short
             # knots), which joined the run: drop the poses between the jumps only (below the
