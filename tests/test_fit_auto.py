@@ -383,3 +383,25 @@ def test_exact_static_poses_fit_without_numpy_warnings():
         warnings.simplefilter("error")
         spl, rep = fit(t, k.position_world, lie.matrix_to_quat_xyzw(k.world_R_body), return_report=True)
     assert np.abs(spl.imu(np.linspace(0.5, 4.5, 100))[0]).max() < 1e-9
+
+
+def test_jittered_stamps_are_warned():
+    """Poses of the flips scene taken every 10 ms but stamped with up to 9 ms of delay (receive
+    times): 2-3% of the intervals are under 3 ms long yet hold a whole step of motion. Warned
+    with the share and time range; the same poses at their true (irregular, exact) times, and
+    the true stamps themselves, are not."""
+    sc = make_scene("flips", duration_s=20.0)
+    t = np.arange(0.0, 20.0, 0.01)
+    stamps = t + 0.009 * np.random.default_rng(4).random(t.size)
+    k = sc.kinematics(t)
+    q = lie.matrix_to_quat_xyzw(k.world_R_body)
+    _, rep = fit(stamps, k.position_world, q, return_report=True)
+    (w,) = [w for w in rep.warnings if w.code == "timestamps_jittered"]
+    short = int(np.count_nonzero(np.diff(stamps) < 0.003))
+    n = int(w.message.split(" of ")[0])
+    assert 0.8 * short <= n <= short and 0.01 * t.size < n, (n, short, w.message)
+    assert w.t_start_s < 2.0 and w.t_end_s > 18.0
+    ks = sc.kinematics(stamps)
+    for tt, kk in ((stamps, ks), (t, k)):
+        _, rep = fit(tt, kk.position_world, lie.matrix_to_quat_xyzw(kk.world_R_body), return_report=True)
+        assert "timestamps_jittered" not in [w.code for w in rep.warnings], [w.message for w in rep.warnings]

@@ -17,6 +17,11 @@ moved its origin): it cannot be dropped and is warned about with its time range,
 that passes (1) without any jump (motion faster than the spline follows there), once its
 residual reaches :data:`WARN_RESIDUAL_M` or :data:`WARN_RESIDUAL_RAD`.
 
+Stamps (:func:`stamp_warnings`): intervals far shorter than the median pose spacing in which the
+poses move as far as in a whole one (mocap logged with receive times, poses re-stamped on arrival)
+mean the stamps are jittered, not the motion; the fit can only read such input as noise or
+jumps, so it is warned about with the share of such intervals and their time range.
+
 Two checks of the whole input (:func:`input_warnings`): fit residuals far above the pose noise
 (the automatic choice's cross-validated level, or, for a given spacing, a robust estimate from
 third differences, which reads coloured noise low and so gets a wider margin), and input whose
@@ -50,6 +55,14 @@ RESIDUAL_FLOOR = 1e-4
 #: Input whose top octave holds at least this fraction of the derivative's power (and whose
 #: second differences fall toward the Nyquist frequency) is warned about as rate-limited.
 TOP_OCTAVE_POWER = 1e-3
+#: A pose interval shorter than JITTER_SHORT x the median spacing in which the poses move at
+#: least JITTER_STEP x what they move in a whole interval there (and that step at least
+#: JITTER_OVER_NOISE x the pose noise's) is a stamp error; warned from JITTER_SHARE of the
+#: intervals (and 3) on. Correctly stamped poses move at most JITTER_SHORT x a step plus noise.
+JITTER_SHORT = 0.3
+JITTER_STEP = 0.7
+JITTER_OVER_NOISE = 10.0
+JITTER_SHARE = 0.01
 #: Consecutive poses rotating more than this are refused (pi/2: 120 deg cannot be told from -240).
 MAX_STEP_ANGLE_RAD = np.pi / 2
 
@@ -76,6 +89,38 @@ def check_rotation_steps(t, R):
     return [FitWarning("gap_turn_ambiguous", f"the poses turn by {np.degrees(ang[i]):.0f} deg across the gap from "
                        f"{t[i]:.3f} s to {t[i + 1]:.3f} s: the fit bridges it with the shortest turn",
                        float(t[i]), float(t[i + 1])) for i in np.flatnonzero(big & gap)]
+
+
+def stamp_warnings(t, P, theta):
+    """A warning if the stamps are jittered (module docstring): the share of the intervals
+    too short for the distance the position or the rotation ``theta`` (accumulated increments)
+    moves in them, and the time from the first to the last."""
+    dt = np.diff(t)
+    if dt.size < 16:
+        return []
+    h = float(np.median(dt))
+    short = dt < JITTER_SHORT * h
+    whole = np.flatnonzero((dt > 0.75 * h) & (dt < 1.25 * h))
+    if np.count_nonzero(short) < 3 or whole.size < 8:
+        return []
+    hit = np.zeros(dt.size, dtype=bool)
+    for Y in (P, theta):
+        step = np.linalg.norm(np.diff(Y, axis=0), axis=1)
+        # what the poses move in a whole interval nearby (running median over 21 of them)
+        ref = np.interp(np.arange(dt.size), whole, _running_median(step[whole] * (h / dt[whole]), 21))
+        noise = np.sqrt(2.0) * _diff_noise(Y)  # a step of the pose noise alone
+        hit |= short & (step > JITTER_STEP * ref) & (ref > JITTER_OVER_NOISE * noise)
+    k = int(np.count_nonzero(hit))
+    if k < max(3, JITTER_SHARE * dt.size):
+        return []
+    i = np.flatnonzero(hit)
+    a, b = float(t[i[0]]), float(t[i[-1] + 1])
+    return [FitWarning(
+        "timestamps_jittered", f"{k} of {dt.size} pose intervals ({100 * k / dt.size:.2g}%, {a:.3f} s to {b:.3f} s) "
+        f"are shorter than {JITTER_SHORT:g}x the median spacing ({1e3 * h:.3g} ms) yet the poses move in them as far "
+        "as in a whole one: the stamps are jittered (receive times?), not the motion; the fit reads the jitter as "
+        "noise or jumps and the synthesized IMU is wrong at the motion's rates: stamp the poses with their capture "
+        "times", a, b)]
 
 
 #: Window x samples up to which the running median runs in the kernel (a few ms); beyond, in

@@ -42,7 +42,7 @@ from .banded import (
     solve_banded_scalar,
 )
 from .basis import blending_matrix
-from .checks import check_rotation_steps, classify_residuals, dropped_warning, input_warnings
+from .checks import check_rotation_steps, classify_residuals, dropped_warning, input_warnings, stamp_warnings
 from .controls import _increments_se3, _quat_wxyz, _to_matrices, _to_quats
 from .core import KINDS, Spline
 from .knots import _LADDER, MAX_CV_POSES, _windows, choose_knot_spacing, prediction_warnings
@@ -476,6 +476,7 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
     theta = np.zeros((t.size, 3))  # accumulated body-frame increments (signals.rotation_signal)
     _gn.quat_increments(q, theta[1:])
     np.cumsum(theta, axis=0, out=theta)
+    gap_warnings += stamp_warnings(t, P, theta)
     dropped = np.zeros(t.size, dtype=bool)
     warnings = []
     for attempt in range(2):
