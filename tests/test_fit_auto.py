@@ -405,3 +405,24 @@ def test_jittered_stamps_are_warned():
     for tt, kk in ((stamps, ks), (t, k)):
         _, rep = fit(tt, kk.position_world, lie.matrix_to_quat_xyzw(kk.world_R_body), return_report=True)
         assert "timestamps_jittered" not in [w.code for w in rep.warnings], [w.message for w in rep.warnings]
+
+
+def test_slow_motion_gets_knots_beyond_two_seconds():
+    """The circle scene turns at 0.4 rad/s: its best fixed rotation spacing is 2.5 s or more. The
+    grid goes on past 2 s (to 10 s or a quarter of the span); held at 2 s the gyro was 1.59x the
+    fixed fit at 2.56 s (measured now 0.72x; order 5 at 3.75 s)."""
+    sc, t, p, R = scene_poses("circle", "white", 60.0, seed=7)
+    q = lie.matrix_to_quat_xyzw(R)
+    te = np.arange(1.0, 59.0, 0.005)
+    g0, f0 = sc.imu(te)
+
+    def errs(spl):
+        g, f = spl.imu(te)
+        return [float(np.sqrt(np.mean(np.sum(e**2, axis=1)))) for e in (g - g0, f - f0)]
+
+    spl, rep = fit(t, p, q, return_report=True)
+    assert rep.knot_spacing_s > 2.5 and rep.position_knot_spacing_s > 1.0
+    auto = errs(spl)
+    fixed = errs(fit(t, p, q, order=5, knot_spacing_s=2.56, reject_outliers=False))
+    assert auto[0] <= 0.9 * fixed[0] and auto[1] <= 1.15 * fixed[1], (auto, fixed)
+    assert 0.5 <= rep.predicted_gyro_rms_rad_s / auto[0] <= 2.0

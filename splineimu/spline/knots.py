@@ -12,11 +12,12 @@ Method
    (4, 5, 6): consecutive poses are grouped in blocks, the blocks dealt to 4 folds in turn, and
    each fold predicted by the spline fitted to the other three; the score is the mean squared
    prediction error away from the ends. The grid runs from 0.7x the median pose spacing (no
-   floor at twice the pose spacing) to a quarter of the span, coarse steps of 1.6x and a finer
-   step around the best. The block length comes from the data: a first pass with 0.1 s blocks,
-   whose residual gives the noise correlation time (the lag where its autocorrelation falls
-   below 0.1); blocks of 3 correlation times (1 pose for white noise) then keep correlated or
-   upsampled noise of a held-out block independent of its training neighbours.
+   floor at twice the pose spacing) to a quarter of the span or :data:`MAX_SPACING_S` (10 s),
+   coarse steps of 1.6x and a finer step around the best. The block length comes from the
+   data: a first pass with 0.1 s blocks, whose residual gives the noise correlation time (the
+   lag where its autocorrelation falls below 0.1); blocks of 3 correlation times (1 pose for
+   white noise) then keep correlated or upsampled noise of a held-out block independent of its
+   training neighbours.
 2. **A noise surrogate**: the residual of that fit is the pose noise times the fit's residual
    transfer, which is measured by passing a white draw through the same fit; dividing the
    residual's periodogram by it estimates the noise spectrum from about the fit's cut-off up,
@@ -130,6 +131,12 @@ _WALK_RUNGS = 8
 WALK_MAX_S = 0.05
 #: Standard gravity [m/s^2], for the accelerometer error an orientation error causes.
 GRAVITY_M_S2 = 9.81
+#: The coarsest knot spacing tried (and a quarter of the span): slow or still motion (a rate
+#: table, a circle at 0.4 rad/s, a parked sensor) is best fitted that smooth; the circle scene's
+#: best fixed spacing is 2.5 s or more. The grid's coarse steps are laid out up to _GRID_TOP_S
+#: and continued beyond it in the same steps.
+MAX_SPACING_S = 10.0
+_GRID_TOP_S = 2.0
 #: The residual autocorrelation below which noise counts as uncorrelated.
 _ACF_LEVEL = 0.1
 
@@ -366,10 +373,14 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
     h = float(np.median(np.diff(t)))
     span = min(wd.t[-1] - wd.t[0] for wd in windows)
     lo = 0.7 * h
-    hi = max(min(span / 4.0, 2.0, dt_max), lo * 1.01)
-    lo = min(lo, hi / 1.01)
+    hi = max(min(span / 4.0, MAX_SPACING_S, dt_max), lo * 1.01)
     if dt_fixed is None:
-        grid = np.geomspace(lo, hi, max(int(np.ceil(np.log(hi / lo) / np.log(_STEP))) + 1, 2))
+        # steps of about _STEP up to _GRID_TOP_S, continued in the same steps beyond it
+        top = max(min(hi, _GRID_TOP_S), lo * 1.01)
+        grid = np.geomspace(lo, top, max(int(np.ceil(np.log(top / lo) / np.log(_STEP))) + 1, 2))
+        if hi > top:
+            step = grid[1] / grid[0]
+            grid = np.r_[grid, np.geomspace(top, hi, int(np.ceil(np.log(hi / top) / np.log(step))) + 1)[1:]]
     else:
         grid = np.array([float(dt_fixed)])
     # 1. cross-validation with 0.1 s blocks, then with blocks of 3 noise correlation times
