@@ -286,6 +286,18 @@ def test_whole_input_warnings():
         assert [w.code for w in rep.warnings] == codes, [w.message for w in rep.warnings]
 
 
+def test_residual_warning_on_exact_poses_at_rest():
+    """Exact poses resting most of the time (six-position scene): the third-difference noise is
+    exactly zero; a given spacing too coarse for its turns is warned about (it divided by zero)."""
+    sc = make_scene("six-position", duration_s=60.0)
+    t = np.arange(0.0, 60.0, 0.005)
+    k = sc.kinematics(t)
+    _, rep = fit(t, k.position_world, lie.matrix_to_quat_xyzw(k.world_R_body), order=4, knot_spacing_s=0.5,
+                 return_report=True)
+    msg = [w.message for w in rep.warnings if w.code == "residual_above_noise"]
+    assert msg and "far above the third-difference pose noise (0 rad)" in msg[-1], msg
+
+
 def test_predicted_accel_counts_gravity_tilted_by_the_orientation_error():
     """Slow motion (the circle scene: 0.4 rad/s, 1 mm / 0.1 deg white pose noise): the
     accelerometer's error is mostly gravity tilted by the orientation error, which the

@@ -311,8 +311,9 @@ def input_warnings(t, P, theta, res_pos, res_rot, keep, choice=None):
         else:
             noise, lim, how = _diff_noise(X[keep]), RESIDUAL_OVER_DIFF_NOISE, "third-difference"
         if rms > lim * max(noise, 1e-12) and rms > RESIDUAL_FLOOR:
+            ratio = f"{rms / noise:.1f}x" if noise > 0 else "far above"  # exact poses: no noise at all
             out.append(FitWarning("residual_above_noise", f"the {key} fit residual ({rms:.3g} {unit} RMS) is "
-                                  f"{rms / noise:.1f}x the {how} pose noise ({noise:.3g} {unit}): the knot spacing "
+                                  f"{ratio} the {how} pose noise ({noise:.3g} {unit}): the knot spacing "
                                   f"is too coarse for the motion, or the poses hold steps"))
     # the spectra only where the input is motion-limited (the choice has already said so)
     frac = {key: _top_octave_fraction(t, X, r) for key, X, _, _, r, _ in parts
