@@ -464,3 +464,26 @@ def test_slow_steady_turning_gets_knots_up_to_135_degrees():
         Rz = lie.so3_exp(np.c_[np.zeros((ts.size, 2)), rate * ts])
         dt = max_rotation_spacing(ts, Rz)
         assert 0.85 * MAX_CONTROL_TURN_RAD <= rate * dt <= MAX_CONTROL_TURN_RAD + 1e-9, (rate, dt)
+
+
+def test_orientation_flips_are_dropped():
+    """Mocap orientation flips (the body's markers matched the wrong way round): one pose turned
+    by 180 degrees and a run of three by 150 degrees, each back afterwards. No spline can follow
+    a turn that large between poses; they are dropped before the fit (listed and warned about),
+    and the rest gives the clean fit's IMU. Without outlier rejection the input is refused,
+    naming the flip."""
+    t, p, q = poses("white", 60.0, seed=2)
+    R = lie.quat_xyzw_to_matrix(q)
+    Rf = R.copy()
+    one, run = 6000, np.arange(8000, 8003)
+    Rf[one] = R[one] @ lie.so3_exp(np.array([np.pi, 0.0, 0.0]))
+    Rf[run] = R[run] @ lie.so3_exp(np.radians([0.0, 150.0, 0.0]))
+    spl, rep = fit(t, p, lie.matrix_to_quat_xyzw(Rf), return_report=True)
+    clean = fit(t, p, q)
+    assert rep.dropped_poses == [one, *run.tolist()] and rep.n_poses == t.size
+    flips = [w for w in rep.warnings if w.code == "outliers_dropped"]
+    assert [w.t_start_s for w in flips] == [t[one], t[run[0]]] and "orientation flip" in flips[0].message
+    got, ref = imu_errors(spl, 60.0), imu_errors(clean, 60.0)
+    assert got[0] <= 1.02 * ref[0] and got[1] <= 1.02 * ref[1], (got, ref)
+    with pytest.raises(InputError, match=f"pose {one} .* orientation flip"):
+        fit(t, p, lie.matrix_to_quat_xyzw(Rf), reject_outliers=False)

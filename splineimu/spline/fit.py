@@ -42,7 +42,15 @@ from .banded import (
     solve_banded_scalar,
 )
 from .basis import blending_matrix
-from .checks import check_rotation_steps, classify_residuals, dropped_warning, input_warnings, stamp_warnings
+from .checks import (
+    check_rotation_steps,
+    classify_residuals,
+    dropped_warning,
+    input_warnings,
+    resolve_setting,
+    rotation_flips,
+    stamp_warnings,
+)
 from .controls import _increments_se3, _quat_wxyz, _to_matrices, _to_quats
 from .core import KINDS, Spline
 from .knots import _LADDER, MAX_CV_POSES, _windows, choose_knot_spacing, prediction_warnings
@@ -335,23 +343,6 @@ class _Problem:
         return x, res, it, converged
 
 
-def _resolve(value, name, kind_name):
-    """``"auto"`` or a positive number (spacing) / an integer (order)."""
-    if isinstance(value, str):
-        if value == "auto":
-            return "auto"
-        try:
-            value = float(value)
-        except ValueError:
-            raise SplineImuError(f"{name} must be a number or 'auto', got {value!r}") from None
-    if kind_name == "order":
-        return int(value)
-    value = float(value)
-    if not (np.isfinite(value) and value > 0):
-        raise SplineImuError(f"{name} must be positive, got {value!r}")
-    return value
-
-
 def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="auto", *, position_order=None,
         position_knot_spacing_s=None, weights=None, smoothness=DEFAULT_SMOOTHNESS, origin_ns=0, max_iter=200,
         reject_outliers=True, progress=False, return_report=False):
@@ -421,15 +412,20 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
     kind = str(kind).lower()
     if kind not in KINDS:
         raise SplineImuError(f"spline kind must be one of {KINDS}, got {kind!r}")
-    r_order = _resolve(order, "order", "order")
-    r_dt = _resolve(knot_spacing_s, "knot spacing", "dt")
-    p_order = r_order if position_order is None else _resolve(position_order, "position order", "order")
-    p_dt = r_dt if position_knot_spacing_s is None else _resolve(position_knot_spacing_s, "position knot spacing",
-                                                                   "dt")
+    r_order = resolve_setting(order, "order", "order")
+    r_dt = resolve_setting(knot_spacing_s, "knot spacing", "dt")
+    p_order = r_order if position_order is None else resolve_setting(position_order, "position order", "order")
+    p_dt = (r_dt if position_knot_spacing_s is None
+            else resolve_setting(position_knot_spacing_s, "position knot spacing", "dt"))
     if kind == "se3" and (position_order is not None or position_knot_spacing_s is not None):
         raise SplineImuError("position_order and position_knot_spacing_s need kind='split'")
     t, P, R, w = _validate(t_s, positions, quat_xyzw, weights)
     q = _quat_wxyz(quat_xyzw)
+    # orientation flips (away and back by more than 90 degrees) are dropped before anything else
+    flips = rotation_flips(t, R) if reject_outliers else np.zeros(t.size, dtype=bool)
+    t_in, flip_warnings = t, dropped_warning(t, flips, "an orientation flip")
+    if flips.any():
+        t, P, R, q, w = (a[~flips] for a in (t, P, R, q, w))
     if t.size < 2:
         raise InputError(f"too few poses to fit: got {t.size}, need at least 2")
     gap_warnings = check_rotation_steps(t, R)
@@ -517,21 +513,22 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
         _rotation_bias(choice, probs[0], Rc, max_iter)
     pred_g = choice["predicted_gyro_rms_rad_s"] if choice else None
     pred_a = choice["predicted_accel_rms_m_s2"] if choice else None
-    warnings = (prediction_warnings(choice, t) + gap_warnings + warnings
+    warnings = (prediction_warnings(choice, t) + flip_warnings + gap_warnings + warnings
                 + input_warnings(t, P, theta, res_pos, res_rot, keep, choice))
     if not conv:
         warnings.append(FitWarning("fit_not_converged", f"the rotation fit stopped after {iters} iterations without "
                                    "converging: the spline may not be the least-squares one (more iterations: "
                                    "fit(max_iter=...); or a coarser knot spacing)"))
     report = FitReport(
-        kind=kind, order=r_order, knot_spacing_s=lay_r[1], knot_spacing_source=source, n_poses=int(t.size),
+        kind=kind, order=r_order, knot_spacing_s=lay_r[1], knot_spacing_source=source, n_poses=int(t_in.size),
         n_control=lay_r[3], span_s=(float(t[0]), float(t[-1])),
         residual_position_rms_m=float(np.sqrt(np.mean(ep**2))), residual_position_max_m=float(ep.max()),
         residual_angle_rms_rad=float(np.sqrt(np.mean(ea**2))), residual_angle_max_rad=float(ea.max()),
         iterations=iters, converged=bool(conv), time_s=time.perf_counter() - t0_wall,
         smoothness=float(smoothness), position_order=p_order, position_knot_spacing_s=lay_p[1],
         n_position_control=lay_p[3], predicted_gyro_rms_rad_s=pred_g, predicted_accel_rms_m_s2=pred_a,
-        dropped_poses=np.flatnonzero(dropped).tolist(), knot_choice=choice,
+        dropped_poses=sorted(np.flatnonzero(flips).tolist() + np.flatnonzero(~flips)[dropped].tolist()),
+        knot_choice=choice,
         sparse_control_points=probs[0].n_sparse, warnings=warnings, origin_ns=int(origin_ns),
     )
     spl.fit_report = report
