@@ -179,8 +179,8 @@ def control_grid_init(t, q, tc, a1, a2, out):
         if 2 <= i < n - 2:
             c1 = a1 - 4.0 * a2
             c2 = a2
-            u0, u1, u2 = _rel_log(F, i, i - 2)
-            v0, v1, v2 = _rel_log(F, i, i + 2)
+            u0, u1, u2 = _two_step_log(F, i, -1)
+            v0, v1, v2 = _two_step_log(F, i, 1)
             z0 = u0 + v0
             z1 = u1 + v1
             z2 = u2 + v2
@@ -197,6 +197,26 @@ def _rel_log(F, i, j):
     """Log(F_i^-1 F_j) as a tuple."""
     e0, e1, e2, e3 = _quat_mul(F[i, 0], -F[i, 1], -F[i, 2], -F[i, 3], F[j, 0], F[j, 1], F[j, 2], F[j, 3])
     return _quat_log(e0, e1, e2, e3)
+
+
+@jit(inline="always")
+def _two_step_log(F, i, s):
+    """``Log(F_i^-1 F_{i+2s})`` unwrapped: where either step turns by more than 60 degrees, the two
+    steps' Logs added in frame i (exact for turns about one axis), since together they may
+    turn beyond pi, where the Log wraps to the opposite turn (knots 90-135 degrees apart)."""
+    x0, x1, x2 = _rel_log(F, i, i + s)
+    y0, y1, y2 = _rel_log(F, i + s, i + 2 * s)
+    lim = (math.pi / 3.0) ** 2
+    if x0 * x0 + x1 * x1 + x2 * x2 <= lim and y0 * y0 + y1 * y1 + y2 * y2 <= lim:
+        return _rel_log(F, i, i + 2 * s)
+    # y turned into frame i by e = F_i^-1 F_{i+s}: y + 2 w (v x y) + 2 v x (v x y)
+    e0, e1, e2, e3 = _quat_mul(F[i, 0], -F[i, 1], -F[i, 2], -F[i, 3], F[i + s, 0], F[i + s, 1], F[i + s, 2],
+                               F[i + s, 3])
+    c0 = 2.0 * (e2 * y2 - e3 * y1)
+    c1 = 2.0 * (e3 * y0 - e1 * y2)
+    c2 = 2.0 * (e1 * y1 - e2 * y0)
+    return (x0 + y0 + e0 * c0 + e2 * c2 - e3 * c1, x1 + y1 + e0 * c1 + e3 * c0 - e1 * c2,
+            x2 + y2 + e0 * c2 + e1 * c1 - e2 * c0)
 
 
 @jit
