@@ -227,3 +227,20 @@ def test_control_rotations_beyond_the_data_do_not_stall_the_fit():
     _, rep = fit(t, tr.positions, tr.quat_xyzw, order=6, knot_spacing_s=0.16945, return_report=True)
     assert rep.converged and rep.iterations <= 8, rep.iterations
     assert "fit_not_converged" not in [w.code for w in rep.warnings]
+
+
+@pytest.mark.parametrize("kw", [{}, {"kind": "se3"}, {"order": 4, "knot_spacing_s": 0.1}])
+def test_fewer_than_three_weighted_poses_is_an_input_error(kw):
+    """Two poses leave the position spline's quadratic (the null space of its third-difference
+    penalty) free: the automatic choice raised a bare ValueError (min() of an empty sequence),
+    order 4 at 0.1 s a "singular" error that blamed the knot spacing. Three poses fit."""
+    t, p, q = ellipse_poses(10, duration=1.0)
+    with pytest.raises(InputError, match="too few poses to fit: got 2 with a positive weight, need at least 3"):
+        fit(t[:2], p[:2], q[:2], **kw)
+    w = np.zeros(t.size)
+    w[[0, 10]] = 1.0
+    with pytest.raises(InputError, match="got 2 with a positive weight"):
+        fit(t, p, q, weights=w, **kw)
+    spl = fit(t[:3], p[:3], q[:3], **kw)
+    np.testing.assert_allclose(spl.pose(t[:3])[0], p[:3], rtol=0, atol=1e-6)
+    assert np.all(np.isfinite(np.concatenate(spl.imu(np.linspace(0.0, 0.2, 11)))))

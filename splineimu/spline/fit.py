@@ -402,7 +402,7 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
     Raises
     ------
     InputError
-        Bad shapes, unsorted or non-finite input, too few poses for the order, consecutive
+        Bad shapes, unsorted or non-finite input, fewer than 3 poses of positive weight, consecutive
         poses rotating by more than 90 degrees.
     SplineImuError
         Bad settings.
@@ -430,8 +430,8 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
         raise SplineImuError("position_order and position_knot_spacing_s need kind='split'")
     t, P, R, w = _validate(t_s, positions, quat_xyzw, weights)
     q = _quat_wxyz(quat_xyzw)
-    if t.size < 2:
-        raise InputError(f"too few poses to fit: got {t.size}, need at least 2")
+    if np.count_nonzero(w) < 3:  # fewer leave the position's quadratic (the penalty's null space) free
+        raise InputError(f"too few poses to fit: got {np.count_nonzero(w)} with a positive weight, need at least 3")
     gap_warnings = check_rotation_steps(t, R)
     given = (r_order, r_dt, p_order, p_dt)
     source = "auto" if isinstance(knot_spacing_s, str) else "given"
