@@ -244,3 +244,19 @@ def test_fewer_than_three_weighted_poses_is_an_input_error(kw):
     spl = fit(t[:3], p[:3], q[:3], **kw)
     np.testing.assert_allclose(spl.pose(t[:3])[0], p[:3], rtol=0, atol=1e-6)
     assert np.all(np.isfinite(np.concatenate(spl.imu(np.linspace(0.0, 0.2, 11)))))
+
+
+@pytest.mark.parametrize("scale", [1e-6, 1e-3, 1e3])
+def test_weights_are_relative(scale):
+    """Scaling every weight changes nothing. The prior on the control rotations beyond the data
+    holds against weights ~1: weights of 1e-3 made it 1000x stronger, which pinned the end
+    rotations and raised the gyro error of the ellipse (1 mm / 0.1 deg) from 0.97 to 5.9 mrad/s
+    (1e-6: 10.4 mrad/s); 1e3 made it 1.14x too."""
+    t, p, q = ellipse_poses(100, 1e-3, np.deg2rad(0.1), duration=10.0)
+    tt = np.linspace(0.0, 10.0, 2001)
+    gyro_err = lambda spl: float(np.sqrt(np.mean((spl.imu(tt)[0] - ELLIPSE.imu(tt)[0]) ** 2)))  # noqa: E731
+    ref = fit(t, p, q)
+    scaled = fit(t, p, q, weights=np.full(t.size, scale))
+    assert gyro_err(ref) < 1.2e-3  # measured 0.97e-3
+    np.testing.assert_allclose(gyro_err(scaled), gyro_err(ref), rtol=1e-6)
+    np.testing.assert_allclose(scaled.control_rotations, ref.control_rotations, rtol=0, atol=1e-9)

@@ -91,6 +91,8 @@ def _validate(t_s, positions, quat_xyzw, weights):
         w = np.ascontiguousarray(np.asarray(weights, dtype=np.float64).reshape(-1))
         if w.shape != t.shape or np.any(~np.isfinite(w)) or np.any(w < 0):
             raise InputError("`weights` must be (N,) finite and non-negative")
+        if w.any():  # relative: the priors (END_TURN_SIGMA_RAD, the penalty) hold against weights ~1
+            w = w / w.max() / np.mean(w[w > 0] / w.max())
     return t, P, R, w
 
 
@@ -375,7 +377,7 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
     position_order, position_knot_spacing_s : int / float / "auto", optional
         The position grid's own settings (``kind="split"`` only).
     weights : (N,) array_like, optional
-        Per-pose weights (0 drops a pose from the data term).
+        Relative per-pose weights (their scale does not matter; 0 drops a pose from the data term).
     smoothness : float
         Relative weight of the P-spline difference penalty (see module notes).
     origin_ns : int
