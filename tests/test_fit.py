@@ -260,3 +260,17 @@ def test_weights_are_relative(scale):
     assert gyro_err(ref) < 1.2e-3  # measured 0.97e-3
     np.testing.assert_allclose(gyro_err(scaled), gyro_err(ref), rtol=1e-6)
     np.testing.assert_allclose(scaled.control_rotations, ref.control_rotations, rtol=0, atol=1e-9)
+
+
+def test_singular_fit_across_a_long_gap_names_the_gap():
+    """A gap of thousands of knot spacings is beyond what the penalty can bridge in double
+    precision (an hour's gap at 0.5 s knots: 7200); the error named the knot spacing and asked
+    for a 'positive smoothness' (it was positive), now it names the gap and the way out."""
+    t, p, q = ellipse_poses(50, duration=10.0)
+    t[250:] += 3600.0
+    msg = r"the 3600.02 s without poses from 4\.980 s to 3605\.000 s spans 7200 knot spacings of 0\.5 s, too many"
+    with pytest.raises(SplineImuError, match=msg + " to bridge; split the poses at the gap"):
+        fit(t, p, q, order=4, knot_spacing_s=0.5)
+    t[250:] -= 3300.0  # 300 s: bridged
+    spl = fit(t, p, q, order=4, knot_spacing_s=0.5)
+    np.testing.assert_allclose(spl.pose(t)[0], p, rtol=0, atol=0.03)  # measured 0.016 (0.5 s knots on the ellipse)

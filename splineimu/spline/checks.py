@@ -327,3 +327,23 @@ def input_warnings(t, P, theta, res_pos, res_rot, keep, choice=None):
                               f"{nyq:.3g} Hz is not in the input, so the synthesized IMU lacks it and the predicted "
                               "errors do not include it"))
     return out
+
+
+#: A gap without poses longer than this many knot spacings is named when a fit is singular.
+SINGULAR_GAP_KNOTS = 100
+
+
+def singular_message(t, w, dt, smoothness):
+    """Why a fit at knot spacing ``dt`` is singular, and what to do: the penalty bridges a gap of
+    ``m`` knot spacings with a conditioning ~m^5 (third differences), which double precision
+    loses from a few thousand on (circle scene, 20 s at 100 Hz, order 4: a 300 s gap fits at
+    0.5 s knots, a 3600 s gap does not)."""
+    tw = t[w > 0]
+    gaps = np.diff(tw)
+    i = int(np.argmax(gaps)) if gaps.size else 0
+    if gaps.size and gaps[i] > SINGULAR_GAP_KNOTS * dt:
+        return (f"the fit is singular: the {gaps[i]:.6g} s without poses from {tw[i]:.3f} s to {tw[i + 1]:.3f} s "
+                f"spans {gaps[i] / dt:.0f} knot spacings of {dt:g} s, too many to bridge; split the poses at the gap "
+                "(from-tum/from-euroc --gaps split) or use a larger knot spacing")
+    return (f"the fit is singular at knot spacing {dt:g} s with smoothness {smoothness:g}: use a larger knot "
+            "spacing or a larger smoothness")

@@ -32,6 +32,7 @@ from .. import lie
 from .._kernels import fit as _kf
 from .._kernels import gauss_newton as _gn
 from ..errors import InputError, SplineImuError
+from . import checks
 from .banded import (
     DEFAULT_SMOOTHNESS,
     SPARSE_SMOOTHNESS,
@@ -594,7 +595,5 @@ def _solve(probs, Rc, kind, max_iter, tick, smoothness):
             res_pos = pos.position_residuals(Pc)
             Rc, res_rot, iters, conv = rot.solve_rotations(Rc, max_iter=max_iter, progress=tick)
     except np.linalg.LinAlgError:
-        raise SplineImuError(
-            f"the fit is singular at knot spacing {min(rot.dt, pos.dt):g} s with smoothness {smoothness:g}: use a "
-            "larger knot spacing or a positive smoothness") from None
+        raise SplineImuError(checks.singular_message(rot.t, rot.w, min(rot.dt, pos.dt), smoothness)) from None
     return Rc, Pc, res_pos, res_rot, iters, conv
