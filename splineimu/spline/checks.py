@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import lie
 from ..errors import InputError
 from .report import FitWarning
 from .surrogate import motion_limited
@@ -65,6 +66,33 @@ JITTER_OVER_NOISE = 10.0
 JITTER_SHARE = 0.01
 #: Consecutive poses rotating more than this are refused (pi/2: 120 deg cannot be told from -240).
 MAX_STEP_ANGLE_RAD = np.pi / 2
+
+
+def validate_poses(t_s, positions, quat_xyzw, weights):
+    """The poses of :func:`splineimu.spline.fit.fit` as float64 ``(t, P, R, w)``, or an InputError;
+    ``w`` scaled to a mean of 1 over the poses of positive weight."""
+    t = np.ascontiguousarray(np.asarray(t_s, dtype=np.float64).reshape(-1))
+    P = np.ascontiguousarray(np.asarray(positions, dtype=np.float64))
+    q = np.asarray(quat_xyzw, dtype=np.float64)
+    if P.shape != (t.size, 3):
+        raise InputError(f"Expected `positions` to have shape ({t.size}, 3), got {P.shape}")
+    if q.shape != (t.size, 4):
+        raise InputError(f"Expected `quat_xyzw` to have shape ({t.size}, 4), got {q.shape}")
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(P)) and np.all(np.isfinite(q))):
+        raise InputError("poses contain NaN or inf")
+    if t.size > 1 and np.any(np.diff(t) <= 0):
+        i = int(np.flatnonzero(np.diff(t) <= 0)[0])
+        raise InputError(f"timestamps must be strictly increasing (pose {i + 1} at {t[i + 1]!r} s)")
+    R = lie.quat_xyzw_to_matrix(q)
+    if weights is None:
+        w = np.ones(t.size)
+    else:
+        w = np.ascontiguousarray(np.asarray(weights, dtype=np.float64).reshape(-1))
+        if w.shape != t.shape or np.any(~np.isfinite(w)) or np.any(w < 0):
+            raise InputError("`weights` must be (N,) finite and non-negative")
+        if w.any():  # relative: the fit's priors (END_TURN_SIGMA_RAD, the penalty) hold against weights ~1
+            w = w / w.max() / np.mean(w[w > 0] / w.max())
+    return t, P, R, w
 
 
 def check_rotation_steps(t, R):

@@ -49,6 +49,7 @@ from .core import KINDS, Spline
 from .knots import _LADDER, MAX_CV_POSES, _windows, choose_knot_spacing, prediction_warnings
 from .report import FitReport, FitWarning
 from .signals import rotation_increments
+from .surrogate import prediction_at_spacing
 
 #: Gauss-Newton stops when the largest update is below this (rad, or m for SE3 translation)
 GN_STEP_TOL = 1e-9
@@ -70,31 +71,6 @@ BIAS_CHECK_POSES = 2000
 #: hundredths of a radian; with exact poses (weights ~1e12) the prior is below the default
 #: smoothness.
 END_TURN_SIGMA_RAD = 0.1
-
-
-def _validate(t_s, positions, quat_xyzw, weights):
-    t = np.ascontiguousarray(np.asarray(t_s, dtype=np.float64).reshape(-1))
-    P = np.ascontiguousarray(np.asarray(positions, dtype=np.float64))
-    q = np.asarray(quat_xyzw, dtype=np.float64)
-    if P.shape != (t.size, 3):
-        raise InputError(f"Expected `positions` to have shape ({t.size}, 3), got {P.shape}")
-    if q.shape != (t.size, 4):
-        raise InputError(f"Expected `quat_xyzw` to have shape ({t.size}, 4), got {q.shape}")
-    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(P)) and np.all(np.isfinite(q))):
-        raise InputError("poses contain NaN or inf")
-    if t.size > 1 and np.any(np.diff(t) <= 0):
-        i = int(np.flatnonzero(np.diff(t) <= 0)[0])
-        raise InputError(f"timestamps must be strictly increasing (pose {i + 1} at {t[i + 1]!r} s)")
-    R = lie.quat_xyzw_to_matrix(q)
-    if weights is None:
-        w = np.ones(t.size)
-    else:
-        w = np.ascontiguousarray(np.asarray(weights, dtype=np.float64).reshape(-1))
-        if w.shape != t.shape or np.any(~np.isfinite(w)) or np.any(w < 0):
-            raise InputError("`weights` must be (N,) finite and non-negative")
-        if w.any():  # relative: the priors (END_TURN_SIGMA_RAD, the penalty) hold against weights ~1
-            w = w / w.max() / np.mean(w[w > 0] / w.max())
-    return t, P, R, w
 
 
 @cache
@@ -431,7 +407,7 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
                                                                    "dt")
     if kind == "se3" and (position_order is not None or position_knot_spacing_s is not None):
         raise SplineImuError("position_order and position_knot_spacing_s need kind='split'")
-    t, P, R, w = _validate(t_s, positions, quat_xyzw, weights)
+    t, P, R, w = checks.validate_poses(t_s, positions, quat_xyzw, weights)
     q = _quat_wxyz(quat_xyzw)
     if np.count_nonzero(w) < 3:  # fewer leave the position's quadratic (the penalty's null space) free
         raise InputError(f"too few poses to fit: got {np.count_nonzero(w)} with a positive weight, need at least 3")
@@ -453,6 +429,10 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
             # one grid: the finer spacing, the position's order (the accelerometer's)
             rdt = pdt = min(rdt, pdt)
             ro = po = max(ro, po)
+            if ch is not None:  # the predictions moved to that spacing
+                ch["predicted_gyro_rms_rad_s"] = prediction_at_spacing(ch["rotation"], rdt, 1)
+                ch["predicted_accel_rms_m_s2"] = float(np.hypot(prediction_at_spacing(ch["position"], pdt, 2),
+                                                                ch["accel_from_orientation_rms_m_s2"]))
         sig = (1e-3, 1e-3) if ch is None else tuple(max(ch[key]["cv_rms"] / np.sqrt(3.0), 1e-6)
                                                     for key in ("rotation", "position"))
         return ch, ro, layout(t[0], t[-1], rdt, ro), po, layout(t[0], t[-1], pdt, po), sig
