@@ -413,6 +413,8 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
         raise InputError(f"too few poses to fit: got {np.count_nonzero(w)} with a positive weight, need at least 3")
     gap_warnings = check_rotation_steps(t, R)
     given = (r_order, r_dt, p_order, p_dt)
+    if "auto" in given:
+        checks.check_stamp_clusters(t)
     source = "auto" if isinstance(knot_spacing_s, str) else "given"
 
     def settings(wts):
