@@ -310,3 +310,20 @@ def test_poses_logged_twice_are_refused_by_the_automatic_choice():
     t3 = np.r_[0.0, np.cumsum(rng.uniform(0.002, 0.018, 199))]
     k = ELLIPSE.kinematics(t3)
     fit(t3, k.position_world, lie.matrix_to_quat_xyzw(k.world_R_body))
+
+
+@pytest.mark.parametrize("kw, msg", [
+    ({"order": 1}, r"order must be an integer in \[2, 8\] or 'auto', got 1"),  # was a bare ValueError
+    ({"order": 4.5}, r"order must be an integer in \[2, 8\]"),  # was cut to 4
+    ({"position_order": 9}, r"position order must be an integer in \[2, 8\]"),
+    ({"knot_spacing_s": np.inf}, r"knot spacing must be positive and finite, got inf"),
+    ({"order": 4, "knot_spacing_s": 1e-300}, r"knot spacing 1e-300 s is too fine: 2e\+300 segments for 101 poses"),
+    ({"order": 4, "knot_spacing_s": 0.1, "position_knot_spacing_s": 1e-6}, r"knot spacing 1e-06 s is too fine"),
+    ({"smoothness": -1.0}, r"smoothness must be finite and >= 0, got -1\.0"),  # was a "singular" fit
+    ({"smoothness": np.nan}, r"smoothness must be finite and >= 0"),
+    ({"max_iter": 0}, r"max_iter must be a positive integer, got 0"),  # returned the initial guess
+])
+def test_bad_settings_are_named(kw, msg):
+    t, p, q = ellipse_poses(50, duration=2.0)
+    with pytest.raises(SplineImuError, match=msg):
+        fit(t, p, q, **kw)

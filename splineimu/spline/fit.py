@@ -42,7 +42,7 @@ from .banded import (
     row_weights,
     solve_banded_scalar,
 )
-from .basis import blending_matrix
+from .basis import MAX_ORDER, MIN_ORDER, blending_matrix
 from .checks import check_rotation_steps, classify_residuals, dropped_warning, input_warnings, stamp_warnings
 from .controls import _increments_se3, _quat_wxyz, _to_matrices, _to_quats
 from .core import KINDS, Spline
@@ -324,10 +324,12 @@ def _resolve(value, name, kind_name):
         except ValueError:
             raise SplineImuError(f"{name} must be a number or 'auto', got {value!r}") from None
     if kind_name == "order":
+        if not (value == int(value) and MIN_ORDER <= value <= MAX_ORDER):  # 4.5 was cut to 4, 1 a ValueError
+            raise SplineImuError(f"{name} must be an integer in [{MIN_ORDER}, {MAX_ORDER}] or 'auto', got {value!r}")
         return int(value)
     value = float(value)
     if not (np.isfinite(value) and value > 0):
-        raise SplineImuError(f"{name} must be positive, got {value!r}")
+        raise SplineImuError(f"{name} must be positive and finite, got {value!r}")
     return value
 
 
@@ -407,7 +409,15 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
                                                                    "dt")
     if kind == "se3" and (position_order is not None or position_knot_spacing_s is not None):
         raise SplineImuError("position_order and position_knot_spacing_s need kind='split'")
+    if not (smoothness >= 0 and np.isfinite(smoothness)):  # -1 and NaN failed as a "singular" fit
+        raise SplineImuError(f"smoothness must be finite and >= 0, got {smoothness!r}")
+    if not (max_iter >= 1 and max_iter == int(max_iter)):  # 0 returned the initial guess
+        raise SplineImuError(f"max_iter must be a positive integer, got {max_iter!r}")
     t, P, R, w = checks.validate_poses(t_s, positions, quat_xyzw, weights)
+    for dt in {r_dt, p_dt} - {"auto"}:  # 1e-300 s asked numpy for 1e300 segments (a bare ValueError)
+        if t.size > 1 and (t[-1] - t[0]) / dt > 100.0 * t.size:
+            raise SplineImuError(f"knot spacing {dt:g} s is too fine: {(t[-1] - t[0]) / dt:.3g} segments for "
+                                 f"{t.size} poses (at most 100 per pose)")
     q = _quat_wxyz(quat_xyzw)
     if np.count_nonzero(w) < 3:  # fewer leave the position's quadratic (the penalty's null space) free
         raise InputError(f"too few poses to fit: got {np.count_nonzero(w)} with a positive weight, need at least 3")
