@@ -327,3 +327,17 @@ def test_bad_settings_are_named(kw, msg):
     t, p, q = ellipse_poses(50, duration=2.0)
     with pytest.raises(SplineImuError, match=msg):
         fit(t, p, q, **kw)
+
+
+def test_not_converged_warning_gives_the_right_advice():
+    """One 20 s segment of the ellipse (pi in yaw): Levenberg-Marquardt finds no step that lowers
+    the cost after 133 of the 200 iterations allowed, and the warning advised more iterations or
+    coarser knots; it now says that finer knots are what helps. Hitting max_iter keeps that advice."""
+    t, p, q = ellipse_poses(20, duration=20.0)
+    _, rep = fit(t, p, q, order=4, knot_spacing_s=20.0, return_report=True)
+    (w,) = [w for w in rep.warnings if w.code == "fit_not_converged"]
+    assert rep.iterations < 200 and "no step lowered the cost any more" in w.message, (rep.iterations, w.message)
+    assert w.message.endswith("too coarse for the turns between them: try a finer knot spacing")
+    _, rep = fit(t, p, q, order=4, knot_spacing_s=20.0, max_iter=3, return_report=True)
+    (w,) = [w for w in rep.warnings if w.code == "fit_not_converged"]
+    assert rep.iterations == 3 and "more iterations: fit(max_iter=...)" in w.message

@@ -515,9 +515,11 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
     warnings = (prediction_warnings(choice, t) + gap_warnings + warnings
                 + input_warnings(t, P, theta, res_pos, res_rot, keep, choice))
     if not conv:
+        why = ("; no step lowered the cost any more, as when the knots are too coarse for the turns between them: try "
+               "a finer knot spacing" if iters < max_iter else  # Levenberg-Marquardt gave up: more would not help
+               " (more iterations: fit(max_iter=...); or a coarser knot spacing)")
         warnings.append(FitWarning("fit_not_converged", f"the rotation fit stopped after {iters} iterations without "
-                                   "converging: the spline may not be the least-squares one (more iterations: "
-                                   "fit(max_iter=...); or a coarser knot spacing)"))
+                                   f"converging: the spline may not be the least-squares one{why}"))
     report = FitReport(
         kind=kind, order=r_order, knot_spacing_s=lay_r[1], knot_spacing_source=source, n_poses=int(t.size),
         n_control=lay_r[3], span_s=(float(t[0]), float(t[-1])),
