@@ -352,7 +352,7 @@ def input_warnings(t, P, theta, res_pos, res_rot, keep, choice=None):
     if t.size < 64:
         return out
     parts = (("position", P, res_pos, "m", 2, "accel"), ("rotation", theta, res_rot, "rad", 1, "gyro"))
-    for key, X, res, unit, _, _ in parts:
+    for key, X, res, unit, _, _ in parts if np.count_nonzero(keep) >= 64 else ():  # few weighted: no level
         rms = float(np.sqrt(np.mean(np.sum(res[keep] ** 2, axis=1))))
         if choice is not None:
             noise, lim, how = choice[key]["cv_rms"], RESIDUAL_OVER_NOISE, "cross-validated"

@@ -505,7 +505,7 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
                      position_dt_s=lay_p[1], position_order=p_order)
     if bar is not None:
         bar.close()
-    keep = ~dropped
+    keep = ~dropped & (w > 0)  # the poses the fit followed: neither dropped nor given weight 0
     ep = np.linalg.norm(res_pos[keep], axis=1)
     ea = np.linalg.norm(res_rot[keep], axis=1)
     if choice is not None and kind == "split":
