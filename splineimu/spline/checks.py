@@ -34,7 +34,8 @@ from __future__ import annotations
 import numpy as np
 
 from .. import lie
-from ..errors import InputError
+from ..errors import InputError, SplineImuError
+from .basis import MAX_ORDER, MIN_ORDER
 from .report import FitWarning
 from .surrogate import motion_limited
 
@@ -115,6 +116,57 @@ def check_stamp_clusters(t):
             "interval as the pose spacing: give the knot spacing and the order, or keep one pose per cluster")
 
 
+def resolve_setting(value, name, kind_name):
+    """``"auto"`` or a positive number (spacing) / an integer (order)."""
+    if isinstance(value, str):
+        if value == "auto":
+            return "auto"
+        try:
+            value = float(value)
+        except ValueError:
+            raise SplineImuError(f"{name} must be a number or 'auto', got {value!r}") from None
+    if kind_name == "order":
+        if not (value == int(value) and MIN_ORDER <= value <= MAX_ORDER):  # 4.5 was cut to 4, 1 a ValueError
+            raise SplineImuError(f"{name} must be an integer in [{MIN_ORDER}, {MAX_ORDER}] or 'auto', got {value!r}")
+        return int(value)
+    value = float(value)
+    if not (np.isfinite(value) and value > 0):
+        raise SplineImuError(f"{name} must be positive and finite, got {value!r}")
+    return value
+
+
+def _angle(Ra, Rb):
+    """Rotation angles between Ra and Rb (N, 3, 3), from the trace of Ra^T Rb."""
+    c = np.einsum("nij,nij->n", Ra, Rb)  # trace(R_a^T R_b) = 1 + 2 cos(angle)
+    return np.arccos(np.clip((c - 1.0) / 2.0, -1.0, 1.0))
+
+
+def rotation_flips(t, R):
+    """Poses (bool (N,)) of orientation flips: runs that turn by more than
+    :data:`MAX_STEP_ANGLE_RAD` away from the pose before them and back, to within half of it,
+    within :data:`MAX_GLITCH_S` (a mocap body's markers matched the wrong way round). No
+    rotation spline can follow them (no turn that large between poses can be told from its
+    opposite); everything else about such a pose is suspect too."""
+    flip = np.zeros(t.size, dtype=bool)
+    if t.size < 3:
+        return flip
+    ang = _angle(R[:-1], R[1:])
+    big = np.flatnonzero(ang > MAX_STEP_ANGLE_RAD)
+    i = 0
+    while i < big.size:
+        a = big[i]  # the run starts at pose a + 1
+        for j in range(i + 1, big.size):
+            b = big[j]  # ... and ends at pose b, back at b + 1
+            if t[b] - t[a + 1] > MAX_GLITCH_S:
+                break
+            if _angle(R[a:a + 1], R[b + 1:b + 2])[0] <= 0.5 * MAX_STEP_ANGLE_RAD:
+                flip[a + 1:b + 1] = True
+                i = j
+                break
+        i += 1
+    return flip
+
+
 def check_rotation_steps(t, R):
     """Refuse input whose consecutive poses rotate by more than :data:`MAX_STEP_ANGLE_RAD`.
 
@@ -123,13 +175,19 @@ def check_rotation_steps(t, R):
     """
     if R.shape[0] < 2:
         return []
-    c = np.einsum("nij,nij->n", R[:-1], R[1:])  # trace(R_a^T R_b) = 1 + 2 cos(angle)
-    ang = np.arccos(np.clip((c - 1.0) / 2.0, -1.0, 1.0))
+    ang = _angle(R[:-1], R[1:])
     dt = np.diff(t)
     gap = dt > 3.0 * np.median(dt)
     big = ang > MAX_STEP_ANGLE_RAD
     if np.any(big & ~gap):
         i = int(np.argmax(np.where(gap, 0.0, ang)))
+        flip = np.flatnonzero(rotation_flips(t, R))
+        if flip.size:
+            a = int(flip[0])
+            raise InputError(
+                f"pose {a} (t = {t[a]:.6f} s) turns by {np.degrees(ang[a - 1]):.1f} deg away from the one before "
+                "and back: an orientation flip of the tracking; remove such poses, or fit with outlier rejection "
+                "(the default), which drops them")
         raise InputError(
             f"poses {i} and {i + 1} (t = {t[i]:.6f} s and {t[i + 1]:.6f} s) rotate by {np.degrees(ang[i]):.1f} deg: "
             f"more than {np.degrees(MAX_STEP_ANGLE_RAD):.0f} deg between consecutive poses cannot be told from "
@@ -320,12 +378,12 @@ def _merge(warnings, max_listed=20):
     return out
 
 
-def dropped_warning(t, drop):
+def dropped_warning(t, drop, what="a tracking glitch"):
     """One warning per run of dropped poses."""
     out = []
     for a, b in _runs(drop, bridge=0):
-        out.append(FitWarning("outliers_dropped", f"{b - a} poses between {t[a]:.3f} s and {t[b - 1]:.3f} s "
-                              "dropped as a tracking glitch", float(t[a]), float(t[b - 1])))
+        where = f"1 pose at {t[a]:.3f} s" if b - a == 1 else f"{b - a} poses between {t[a]:.3f} s and {t[b - 1]:.3f} s"
+        out.append(FitWarning("outliers_dropped", f"{where} dropped as {what}", float(t[a]), float(t[b - 1])))
     return _merge(out)
 
 

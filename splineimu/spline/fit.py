@@ -42,8 +42,16 @@ from .banded import (
     row_weights,
     solve_banded_scalar,
 )
-from .basis import MAX_ORDER, MIN_ORDER, blending_matrix
-from .checks import check_rotation_steps, classify_residuals, dropped_warning, input_warnings, stamp_warnings
+from .basis import blending_matrix
+from .checks import (
+    check_rotation_steps,
+    classify_residuals,
+    dropped_warning,
+    input_warnings,
+    resolve_setting,
+    rotation_flips,
+    stamp_warnings,
+)
 from .controls import _increments_se3, _quat_wxyz, _to_matrices, _to_quats
 from .core import KINDS, Spline
 from .knots import _LADDER, MAX_CV_POSES, _windows, choose_knot_spacing, prediction_warnings
@@ -314,25 +322,6 @@ class _Problem:
         return x, res, it, converged
 
 
-def _resolve(value, name, kind_name):
-    """``"auto"`` or a positive number (spacing) / an integer (order)."""
-    if isinstance(value, str):
-        if value == "auto":
-            return "auto"
-        try:
-            value = float(value)
-        except ValueError:
-            raise SplineImuError(f"{name} must be a number or 'auto', got {value!r}") from None
-    if kind_name == "order":
-        if not (value == int(value) and MIN_ORDER <= value <= MAX_ORDER):  # 4.5 was cut to 4, 1 a ValueError
-            raise SplineImuError(f"{name} must be an integer in [{MIN_ORDER}, {MAX_ORDER}] or 'auto', got {value!r}")
-        return int(value)
-    value = float(value)
-    if not (np.isfinite(value) and value > 0):
-        raise SplineImuError(f"{name} must be positive and finite, got {value!r}")
-    return value
-
-
 def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="auto", *, position_order=None,
         position_knot_spacing_s=None, weights=None, smoothness=DEFAULT_SMOOTHNESS, origin_ns=0, max_iter=200,
         reject_outliers=True, progress=False, return_report=False):
@@ -402,11 +391,11 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
     kind = str(kind).lower()
     if kind not in KINDS:
         raise SplineImuError(f"spline kind must be one of {KINDS}, got {kind!r}")
-    r_order = _resolve(order, "order", "order")
-    r_dt = _resolve(knot_spacing_s, "knot spacing", "dt")
-    p_order = r_order if position_order is None else _resolve(position_order, "position order", "order")
-    p_dt = r_dt if position_knot_spacing_s is None else _resolve(position_knot_spacing_s, "position knot spacing",
-                                                                   "dt")
+    r_order = resolve_setting(order, "order", "order")
+    r_dt = resolve_setting(knot_spacing_s, "knot spacing", "dt")
+    p_order = r_order if position_order is None else resolve_setting(position_order, "position order", "order")
+    p_dt = (r_dt if position_knot_spacing_s is None
+            else resolve_setting(position_knot_spacing_s, "position knot spacing", "dt"))
     if kind == "se3" and (position_order is not None or position_knot_spacing_s is not None):
         raise SplineImuError("position_order and position_knot_spacing_s need kind='split'")
     if not (smoothness >= 0 and np.isfinite(smoothness)):  # -1 and NaN failed as a "singular" fit
@@ -419,6 +408,11 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
             raise SplineImuError(f"knot spacing {dt:g} s is too fine: {(t[-1] - t[0]) / dt:.3g} segments for "
                                  f"{t.size} poses (at most 100 per pose)")
     q = _quat_wxyz(quat_xyzw)
+    # orientation flips (away and back by more than 90 degrees) are dropped before anything else
+    flips = rotation_flips(t, R) if reject_outliers else np.zeros(t.size, dtype=bool)
+    t_in, flip_warnings = t, dropped_warning(t, flips, "an orientation flip")
+    if flips.any():
+        t, P, R, q, w = (a[~flips] for a in (t, P, R, q, w))
     if np.count_nonzero(w) < 3:  # fewer leave the position's quadratic (the penalty's null space) free
         raise InputError(f"too few poses to fit: got {np.count_nonzero(w)} with a positive weight, need at least 3")
     gap_warnings = check_rotation_steps(t, R)
@@ -512,7 +506,7 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
         _rotation_bias(choice, probs[0], Rc, max_iter)
     pred_g = choice["predicted_gyro_rms_rad_s"] if choice else None
     pred_a = choice["predicted_accel_rms_m_s2"] if choice else None
-    warnings = (prediction_warnings(choice, t) + gap_warnings + warnings
+    warnings = (prediction_warnings(choice, t) + flip_warnings + gap_warnings + warnings
                 + input_warnings(t, P, theta, res_pos, res_rot, keep, choice))
     if not conv:
         why = ("; no step lowered the cost any more, as when the knots are too coarse for the turns between them: try "
@@ -521,14 +515,15 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
         warnings.append(FitWarning("fit_not_converged", f"the rotation fit stopped after {iters} iterations without "
                                    f"converging: the spline may not be the least-squares one{why}"))
     report = FitReport(
-        kind=kind, order=r_order, knot_spacing_s=lay_r[1], knot_spacing_source=source, n_poses=int(t.size),
+        kind=kind, order=r_order, knot_spacing_s=lay_r[1], knot_spacing_source=source, n_poses=int(t_in.size),
         n_control=lay_r[3], span_s=(float(t[0]), float(t[-1])),
         residual_position_rms_m=float(np.sqrt(np.mean(ep**2))), residual_position_max_m=float(ep.max()),
         residual_angle_rms_rad=float(np.sqrt(np.mean(ea**2))), residual_angle_max_rad=float(ea.max()),
         iterations=iters, converged=bool(conv), time_s=time.perf_counter() - t0_wall,
         smoothness=float(smoothness), position_order=p_order, position_knot_spacing_s=lay_p[1],
         n_position_control=lay_p[3], predicted_gyro_rms_rad_s=pred_g, predicted_accel_rms_m_s2=pred_a,
-        dropped_poses=np.flatnonzero(dropped).tolist(), knot_choice=choice,
+        dropped_poses=sorted(np.flatnonzero(flips).tolist() + np.flatnonzero(~flips)[dropped].tolist()),
+        knot_choice=choice,
         sparse_control_points=probs[0].n_sparse, warnings=warnings, origin_ns=int(origin_ns),
     )
     spl.fit_report = report

@@ -57,12 +57,14 @@ Method
    held-out error grows by less than 5x with blocks twice as long (noise: 1.5-2.8x, exact
    poses' motion 28-130x), the error at the choice were that error white noise is reported
    too (``predicted_rms_if_noise``, warning ``prediction_assumes_motion``).
-5. The rotation spacing never exceeds the time in which the input turns by 90 degrees
+5. The rotation spacing never exceeds the time in which the input turns by 135 degrees
    (:func:`max_rotation_spacing`): further apart, neighbouring control rotations near the
    opposite turn. Fast smooth rotation is best close to it (the flips scene, 17 rad/s, AR(1)
    or upsampled noise: 70-80 ms, 70-80 degrees; a 60-degree limit held it at 55 ms, gyro 1.33x
-   the best fixed setting, now 1.01-1.15x). The control rotations beyond the data extrapolate
-   the turn; the fit's prior on them keeps Gauss-Newton converging (``END_TURN_SIGMA_RAD``).
+   the best fixed setting, now 0.88-1.14x); so is slow steady turning (screw scene, 0.65
+   rad/s: a 90-degree limit held it at 2.4 s, gyro 1.11-1.28x the fixed fit at 2.56 s, now
+   0.77-0.87x at 3.5 s). The control rotations beyond the data extrapolate the turn; the
+   fit's prior on them keeps Gauss-Newton converging (``END_TURN_SIGMA_RAD``).
 
 Cost: per (order, spacing) one pass over the poses for the normal equations of all folds,
 banded Cholesky solves of the control-point size and one pass for the predictions, each one

@@ -8,10 +8,11 @@ import numpy as np
 
 from .. import lie
 
-#: The rotation spline's neighbouring control rotations may turn by at most this at the
-#: input's fastest rate (increments are taken as the shortest turn, below pi; 60 degrees cost
-#: fast smooth rotation a third more gyro error, see knots.py step 5).
-MAX_CONTROL_TURN_RAD = np.pi / 2
+#: The rotation spline's neighbouring control rotations may turn by at most this (135 degrees)
+#: at the input's fastest rate (increments are taken as the shortest turn, below pi; 60 degrees
+#: cost fast smooth rotation a third more gyro error, 90 degrees slow steady turns 1.1-1.3x,
+#: see knots.py step 5).
+MAX_CONTROL_TURN_RAD = 0.75 * np.pi
 
 
 def max_rotation_spacing(t, R):
@@ -41,12 +42,15 @@ def max_rotation_spacing(t, R):
 
     if n < 2 or not within(1):
         return 0.7 * h
+    # grow by at most pi / limit: a turn within the limit over m poses is then below pi over the
+    # next m (the angle from the trace wraps beyond pi)
+    grow = min(2.0, np.pi / MAX_CONTROL_TURN_RAD)
     m = 1
-    while 2 * m < n and within(2 * m):
-        m *= 2
-    if 2 * m >= n:
+    while (nxt := max(m + 1, int(m * grow))) < n and within(nxt):
+        m = nxt
+    if nxt >= n:
         return np.inf
-    lo_m, hi_m = m, 2 * m  # within(lo_m), not within(hi_m)
+    lo_m, hi_m = m, nxt  # within(lo_m), not within(hi_m)
     while hi_m - lo_m > max(1, lo_m // 8):
         mid = (lo_m + hi_m) // 2
         lo_m, hi_m = (mid, hi_m) if within(mid) else (lo_m, mid)
