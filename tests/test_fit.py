@@ -227,3 +227,139 @@ def test_control_rotations_beyond_the_data_do_not_stall_the_fit():
     _, rep = fit(t, tr.positions, tr.quat_xyzw, order=6, knot_spacing_s=0.16945, return_report=True)
     assert rep.converged and rep.iterations <= 8, rep.iterations
     assert "fit_not_converged" not in [w.code for w in rep.warnings]
+
+
+@pytest.mark.parametrize("kw", [{}, {"kind": "se3"}, {"order": 4, "knot_spacing_s": 0.1}])
+def test_fewer_than_three_weighted_poses_is_an_input_error(kw):
+    """Two poses leave the position spline's quadratic (the null space of its third-difference
+    penalty) free: the automatic choice raised a bare ValueError (min() of an empty sequence),
+    order 4 at 0.1 s a "singular" error that blamed the knot spacing. Three poses fit."""
+    t, p, q = ellipse_poses(10, duration=1.0)
+    with pytest.raises(InputError, match="too few poses to fit: got 2 with a positive weight, need at least 3"):
+        fit(t[:2], p[:2], q[:2], **kw)
+    w = np.zeros(t.size)
+    w[[0, 10]] = 1.0
+    with pytest.raises(InputError, match="got 2 with a positive weight"):
+        fit(t, p, q, weights=w, **kw)
+    spl = fit(t[:3], p[:3], q[:3], **kw)
+    np.testing.assert_allclose(spl.pose(t[:3])[0], p[:3], rtol=0, atol=1e-6)
+    assert np.all(np.isfinite(np.concatenate(spl.imu(np.linspace(0.0, 0.2, 11)))))
+
+
+@pytest.mark.parametrize("scale", [1e-6, 1e-3, 1e3])
+def test_weights_are_relative(scale):
+    """Scaling every weight changes nothing. The prior on the control rotations beyond the data
+    holds against weights ~1: weights of 1e-3 made it 1000x stronger, which pinned the end
+    rotations and raised the gyro error of the ellipse (1 mm / 0.1 deg) from 0.97 to 5.9 mrad/s
+    (1e-6: 10.4 mrad/s); 1e3 made it 1.14x too."""
+    t, p, q = ellipse_poses(100, 1e-3, np.deg2rad(0.1), duration=10.0)
+    tt = np.linspace(0.0, 10.0, 2001)
+    gyro_err = lambda spl: float(np.sqrt(np.mean((spl.imu(tt)[0] - ELLIPSE.imu(tt)[0]) ** 2)))  # noqa: E731
+    ref = fit(t, p, q)
+    scaled = fit(t, p, q, weights=np.full(t.size, scale))
+    assert gyro_err(ref) < 1.2e-3  # measured 0.97e-3
+    np.testing.assert_allclose(gyro_err(scaled), gyro_err(ref), rtol=1e-6)
+    np.testing.assert_allclose(scaled.control_rotations, ref.control_rotations, rtol=0, atol=1e-9)
+
+
+def test_singular_fit_across_a_long_gap_names_the_gap():
+    """A gap of thousands of knot spacings is beyond what the penalty can bridge in double
+    precision (an hour's gap at 0.5 s knots: 7200); the error named the knot spacing and asked
+    for a 'positive smoothness' (it was positive), now it names the gap and the way out."""
+    t, p, q = ellipse_poses(50, duration=10.0)
+    t[250:] += 3600.0
+    msg = r"the 3600.02 s without poses from 4\.980 s to 3605\.000 s spans 7200 knot spacings of 0\.5 s, too many"
+    with pytest.raises(SplineImuError, match=msg + " to bridge; split the poses at the gap"):
+        fit(t, p, q, order=4, knot_spacing_s=0.5)
+    t[250:] -= 3300.0  # 300 s: bridged
+    spl = fit(t, p, q, order=4, knot_spacing_s=0.5)
+    np.testing.assert_allclose(spl.pose(t)[0], p, rtol=0, atol=0.03)  # measured 0.016 (0.5 s knots on the ellipse)
+
+
+def test_se3_predicted_error_is_at_the_grid_it_fits():
+    """kind="se3" fits rotation and position on the finer of the two chosen spacings; the
+    report predicted the gyro at the rotation's own (ellipse, 1 mm / 0.1 deg, 100 Hz, 10 s: 0.85 s
+    chosen, 0.31 s fitted: predicted 0.77 mrad/s against 2.9 measured, with no warning). Now the
+    noise part is moved to the fitted spacing: 3.4 predicted."""
+    t, p, q = ellipse_poses(100, 1e-3, np.deg2rad(0.1), duration=10.0)
+    spl, rep = fit(t, p, q, kind="se3", return_report=True)
+    tt = np.linspace(0.5, 9.5, 2001)
+    g, f = spl.imu(tt)
+    g0, f0 = ELLIPSE.imu(tt)
+    gyro = float(np.sqrt(np.mean(np.sum((g - g0) ** 2, axis=1))))
+    accel = float(np.sqrt(np.mean(np.sum((f - f0) ** 2, axis=1))))
+    assert rep.knot_spacing_s < 0.5 * rep.knot_choice["rotation"]["knot_spacing_s"]  # the case in point
+    assert 0.8 < rep.predicted_gyro_rms_rad_s / gyro < 2.0, (rep.predicted_gyro_rms_rad_s, gyro)  # measured 1.19
+    assert 0.5 < rep.predicted_accel_rms_m_s2 / accel < 2.0, (rep.predicted_accel_rms_m_s2, accel)  # measured 0.73
+
+
+def test_poses_logged_twice_are_refused_by_the_automatic_choice():
+    """Each pose logged twice, 1 us apart: the automatic choice took the median interval (1 us) for
+    the pose spacing and fitted splines of millions of segments (100 Hz, 10 s: stopped after 14
+    minutes at 6 GB). Now an InputError names the clusters; given settings still fit."""
+    t, p, q = ellipse_poses(100, duration=2.0)
+    t2 = np.sort(np.r_[t, t + 1e-6])
+    p2, q2 = np.repeat(p, 2, axis=0), np.repeat(q, 2, axis=0)
+    for kw in ({"knot_spacing_s": 0.05}, {}, {"order": 4}):  # the first one returned (fast) without the check
+        with pytest.raises(InputError, match=r"stamps come in clusters: half the intervals are under 0\.001 ms"):
+            fit(t2, p2, q2, **kw)
+    spl = fit(t2, p2, q2, order=4, knot_spacing_s=0.05)
+    np.testing.assert_allclose(spl.pose(t)[0], p, rtol=0, atol=1e-4)  # measured 3e-6
+    # irregular stamps (intervals 0.2-1.8x) are no clusters
+    rng = np.random.default_rng(0)
+    t3 = np.r_[0.0, np.cumsum(rng.uniform(0.002, 0.018, 199))]
+    k = ELLIPSE.kinematics(t3)
+    fit(t3, k.position_world, lie.matrix_to_quat_xyzw(k.world_R_body))
+
+
+@pytest.mark.parametrize("kw, msg", [
+    ({"order": 1}, r"order must be an integer in \[2, 8\] or 'auto', got 1"),  # was a bare ValueError
+    ({"order": 4.5}, r"order must be an integer in \[2, 8\]"),  # was cut to 4
+    ({"position_order": 9}, r"position order must be an integer in \[2, 8\]"),
+    ({"knot_spacing_s": np.inf}, r"knot spacing must be positive and finite, got inf"),
+    ({"order": 4, "knot_spacing_s": 1e-300}, r"knot spacing 1e-300 s is too fine: 2e\+300 segments for 101 poses"),
+    ({"order": 4, "knot_spacing_s": 0.1, "position_knot_spacing_s": 1e-6}, r"knot spacing 1e-06 s is too fine"),
+    ({"smoothness": -1.0}, r"smoothness must be finite and >= 0, got -1\.0"),  # was a "singular" fit
+    ({"smoothness": np.nan}, r"smoothness must be finite and >= 0"),
+    ({"max_iter": 0}, r"max_iter must be a positive integer, got 0"),  # returned the initial guess
+])
+def test_bad_settings_are_named(kw, msg):
+    t, p, q = ellipse_poses(50, duration=2.0)
+    with pytest.raises(SplineImuError, match=msg):
+        fit(t, p, q, **kw)
+
+
+def test_not_converged_warning_gives_the_right_advice():
+    """One 20 s segment of the ellipse (pi in yaw): Levenberg-Marquardt finds no step that lowers
+    the cost after 133 of the 200 iterations allowed, and the warning advised more iterations or
+    coarser knots; it now says that finer knots are what helps. Hitting max_iter keeps that advice."""
+    t, p, q = ellipse_poses(20, duration=20.0)
+    _, rep = fit(t, p, q, order=4, knot_spacing_s=20.0, return_report=True)
+    (w,) = [w for w in rep.warnings if w.code == "fit_not_converged"]
+    assert rep.iterations < 200 and "no step lowered the cost any more" in w.message, (rep.iterations, w.message)
+    assert w.message.endswith("too coarse for the turns between them: try a finer knot spacing")
+    _, rep = fit(t, p, q, order=4, knot_spacing_s=20.0, max_iter=3, return_report=True)
+    (w,) = [w for w in rep.warnings if w.code == "fit_not_converged"]
+    assert rep.iterations == 3 and "more iterations: fit(max_iter=...)" in w.message
+
+
+def test_poses_of_weight_zero_are_not_in_the_residuals():
+    """Poses given weight 0 are not followed, like dropped ones: their distance from the spline
+    (extrapolated over the first and last 0.5 s of the ellipse: 2.2 cm RMS against 1.7 mm noise)
+    went into the report's residuals and a residual_above_noise warning that blamed the knot
+    spacing. With 3 weighted poses of 1001 the residual check read numpy's mean of nothing."""
+    import warnings
+
+    t, p, q = ellipse_poses(100, 1e-3, np.deg2rad(0.1), duration=10.0)
+    w = np.ones(t.size)
+    w[:50] = w[-50:] = 0.0
+    _, rep = fit(t, p, q, weights=w, return_report=True)
+    assert rep.residual_position_rms_m < 2.5e-3, rep.residual_position_rms_m  # measured 2.0e-3
+    assert rep.residual_angle_rms_rad < np.deg2rad(0.2), rep.residual_angle_rms_rad  # measured 3.1e-3 rad
+    assert "residual_above_noise" not in [x.code for x in rep.warnings]
+    w[:] = 0.0
+    w[[0, 500, 1000]] = 1.0
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        _, rep = fit(t, p, q, weights=w, order=4, knot_spacing_s=0.1, return_report=True)
+    assert rep.residual_position_rms_m < 1e-9  # three poses: interpolated

@@ -33,7 +33,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import lie
 from ..errors import InputError, SplineImuError
+from .basis import MAX_ORDER, MIN_ORDER
 from .report import FitWarning
 from .surrogate import motion_limited
 
@@ -67,6 +69,53 @@ JITTER_SHARE = 0.01
 MAX_STEP_ANGLE_RAD = np.pi / 2
 
 
+def validate_poses(t_s, positions, quat_xyzw, weights):
+    """The poses of :func:`splineimu.spline.fit.fit` as float64 ``(t, P, R, w)``, or an InputError;
+    ``w`` scaled to a mean of 1 over the poses of positive weight."""
+    t = np.ascontiguousarray(np.asarray(t_s, dtype=np.float64).reshape(-1))
+    P = np.ascontiguousarray(np.asarray(positions, dtype=np.float64))
+    q = np.asarray(quat_xyzw, dtype=np.float64)
+    if P.shape != (t.size, 3):
+        raise InputError(f"Expected `positions` to have shape ({t.size}, 3), got {P.shape}")
+    if q.shape != (t.size, 4):
+        raise InputError(f"Expected `quat_xyzw` to have shape ({t.size}, 4), got {q.shape}")
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(P)) and np.all(np.isfinite(q))):
+        raise InputError("poses contain NaN or inf")
+    if t.size > 1 and np.any(np.diff(t) <= 0):
+        i = int(np.flatnonzero(np.diff(t) <= 0)[0])
+        raise InputError(f"timestamps must be strictly increasing (pose {i + 1} at {t[i + 1]!r} s)")
+    R = lie.quat_xyzw_to_matrix(q)
+    if weights is None:
+        w = np.ones(t.size)
+    else:
+        w = np.ascontiguousarray(np.asarray(weights, dtype=np.float64).reshape(-1))
+        if w.shape != t.shape or np.any(~np.isfinite(w)) or np.any(w < 0):
+            raise InputError("`weights` must be (N,) finite and non-negative")
+        if w.any():  # relative: the fit's priors (END_TURN_SIGMA_RAD, the penalty) hold against weights ~1
+            w = w / w.max() / np.mean(w[w > 0] / w.max())
+    return t, P, R, w
+
+
+#: Stamps whose median interval is below this fraction of their 90th percentile come in clusters.
+CLUSTER_RATIO = 0.05
+
+
+def check_stamp_clusters(t):
+    """Refuse stamps in clusters for the automatic knot choice, which takes the median interval for
+    the pose spacing and tries knots from 0.7 times it: poses logged twice 1 us apart (100 Hz, 10 s)
+    had it fit million-segment splines, 14 minutes and 6 GB before it was stopped. Gaps and
+    irregular sampling leave the median near the 90th percentile (random 0.2-1.8x: 0.6 of it)."""
+    dt = np.diff(t)
+    if dt.size < 10:
+        return
+    h, h90 = np.median(dt), np.percentile(dt, 90)
+    if h < CLUSTER_RATIO * h90:
+        raise InputError(
+            f"the pose stamps come in clusters: half the intervals are under {h * 1e3:.3g} ms, a tenth over "
+            f"{h90 * 1e3:.3g} ms (poses logged twice, or in bursts?); the automatic knot choice reads the median "
+            "interval as the pose spacing: give the knot spacing and the order, or keep one pose per cluster")
+
+
 def resolve_setting(value, name, kind_name):
     """``"auto"`` or a positive number (spacing) / an integer (order)."""
     if isinstance(value, str):
@@ -77,10 +126,12 @@ def resolve_setting(value, name, kind_name):
         except ValueError:
             raise SplineImuError(f"{name} must be a number or 'auto', got {value!r}") from None
     if kind_name == "order":
+        if not (value == int(value) and MIN_ORDER <= value <= MAX_ORDER):  # 4.5 was cut to 4, 1 a ValueError
+            raise SplineImuError(f"{name} must be an integer in [{MIN_ORDER}, {MAX_ORDER}] or 'auto', got {value!r}")
         return int(value)
     value = float(value)
     if not (np.isfinite(value) and value > 0):
-        raise SplineImuError(f"{name} must be positive, got {value!r}")
+        raise SplineImuError(f"{name} must be positive and finite, got {value!r}")
     return value
 
 
@@ -359,7 +410,7 @@ def input_warnings(t, P, theta, res_pos, res_rot, keep, choice=None):
     if t.size < 64:
         return out
     parts = (("position", P, res_pos, "m", 2, "accel"), ("rotation", theta, res_rot, "rad", 1, "gyro"))
-    for key, X, res, unit, _, _ in parts:
+    for key, X, res, unit, _, _ in parts if np.count_nonzero(keep) >= 64 else ():  # few weighted: no level
         rms = float(np.sqrt(np.mean(np.sum(res[keep] ** 2, axis=1))))
         if choice is not None:
             noise, lim, how = choice[key]["cv_rms"], RESIDUAL_OVER_NOISE, "cross-validated"
@@ -382,3 +433,23 @@ def input_warnings(t, P, theta, res_pos, res_rot, keep, choice=None):
                               f"{nyq:.3g} Hz is not in the input, so the synthesized IMU lacks it and the predicted "
                               "errors do not include it"))
     return out
+
+
+#: A gap without poses longer than this many knot spacings is named when a fit is singular.
+SINGULAR_GAP_KNOTS = 100
+
+
+def singular_message(t, w, dt, smoothness):
+    """Why a fit at knot spacing ``dt`` is singular, and what to do: the penalty bridges a gap of
+    ``m`` knot spacings with a conditioning ~m^5 (third differences), which double precision
+    loses from a few thousand on (circle scene, 20 s at 100 Hz, order 4: a 300 s gap fits at
+    0.5 s knots, a 3600 s gap does not)."""
+    tw = t[w > 0]
+    gaps = np.diff(tw)
+    i = int(np.argmax(gaps)) if gaps.size else 0
+    if gaps.size and gaps[i] > SINGULAR_GAP_KNOTS * dt:
+        return (f"the fit is singular: the {gaps[i]:.6g} s without poses from {tw[i]:.3f} s to {tw[i + 1]:.3f} s "
+                f"spans {gaps[i] / dt:.0f} knot spacings of {dt:g} s, too many to bridge; split the poses at the gap "
+                "(from-tum/from-euroc --gaps split) or use a larger knot spacing")
+    return (f"the fit is singular at knot spacing {dt:g} s with smoothness {smoothness:g}: use a larger knot "
+            "spacing or a larger smoothness")

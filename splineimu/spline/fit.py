@@ -32,6 +32,7 @@ from .. import lie
 from .._kernels import fit as _kf
 from .._kernels import gauss_newton as _gn
 from ..errors import InputError, SplineImuError
+from . import checks
 from .banded import (
     DEFAULT_SMOOTHNESS,
     SPARSE_SMOOTHNESS,
@@ -56,6 +57,7 @@ from .core import KINDS, Spline
 from .knots import _LADDER, MAX_CV_POSES, _windows, choose_knot_spacing, prediction_warnings
 from .report import FitReport, FitWarning
 from .signals import rotation_increments
+from .surrogate import prediction_at_spacing
 
 #: Gauss-Newton stops when the largest update is below this (rad, or m for SE3 translation)
 GN_STEP_TOL = 1e-9
@@ -77,29 +79,6 @@ BIAS_CHECK_POSES = 2000
 #: hundredths of a radian; with exact poses (weights ~1e12) the prior is below the default
 #: smoothness.
 END_TURN_SIGMA_RAD = 0.1
-
-
-def _validate(t_s, positions, quat_xyzw, weights):
-    t = np.ascontiguousarray(np.asarray(t_s, dtype=np.float64).reshape(-1))
-    P = np.ascontiguousarray(np.asarray(positions, dtype=np.float64))
-    q = np.asarray(quat_xyzw, dtype=np.float64)
-    if P.shape != (t.size, 3):
-        raise InputError(f"Expected `positions` to have shape ({t.size}, 3), got {P.shape}")
-    if q.shape != (t.size, 4):
-        raise InputError(f"Expected `quat_xyzw` to have shape ({t.size}, 4), got {q.shape}")
-    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(P)) and np.all(np.isfinite(q))):
-        raise InputError("poses contain NaN or inf")
-    if t.size > 1 and np.any(np.diff(t) <= 0):
-        i = int(np.flatnonzero(np.diff(t) <= 0)[0])
-        raise InputError(f"timestamps must be strictly increasing (pose {i + 1} at {t[i + 1]!r} s)")
-    R = lie.quat_xyzw_to_matrix(q)
-    if weights is None:
-        w = np.ones(t.size)
-    else:
-        w = np.ascontiguousarray(np.asarray(weights, dtype=np.float64).reshape(-1))
-        if w.shape != t.shape or np.any(~np.isfinite(w)) or np.any(w < 0):
-            raise InputError("`weights` must be (N,) finite and non-negative")
-    return t, P, R, w
 
 
 @cache
@@ -366,7 +345,7 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
     position_order, position_knot_spacing_s : int / float / "auto", optional
         The position grid's own settings (``kind="split"`` only).
     weights : (N,) array_like, optional
-        Per-pose weights (0 drops a pose from the data term).
+        Relative per-pose weights (their scale does not matter; 0 drops a pose from the data term).
     smoothness : float
         Relative weight of the P-spline difference penalty (see module notes).
     origin_ns : int
@@ -393,7 +372,7 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
     Raises
     ------
     InputError
-        Bad shapes, unsorted or non-finite input, too few poses for the order, consecutive
+        Bad shapes, unsorted or non-finite input, fewer than 3 poses of positive weight, consecutive
         poses rotating by more than 90 degrees.
     SplineImuError
         Bad settings.
@@ -419,17 +398,27 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
             else resolve_setting(position_knot_spacing_s, "position knot spacing", "dt"))
     if kind == "se3" and (position_order is not None or position_knot_spacing_s is not None):
         raise SplineImuError("position_order and position_knot_spacing_s need kind='split'")
-    t, P, R, w = _validate(t_s, positions, quat_xyzw, weights)
+    if not (smoothness >= 0 and np.isfinite(smoothness)):  # -1 and NaN failed as a "singular" fit
+        raise SplineImuError(f"smoothness must be finite and >= 0, got {smoothness!r}")
+    if not (max_iter >= 1 and max_iter == int(max_iter)):  # 0 returned the initial guess
+        raise SplineImuError(f"max_iter must be a positive integer, got {max_iter!r}")
+    t, P, R, w = checks.validate_poses(t_s, positions, quat_xyzw, weights)
+    for dt in {r_dt, p_dt} - {"auto"}:  # 1e-300 s asked numpy for 1e300 segments (a bare ValueError)
+        if t.size > 1 and (t[-1] - t[0]) / dt > 100.0 * t.size:
+            raise SplineImuError(f"knot spacing {dt:g} s is too fine: {(t[-1] - t[0]) / dt:.3g} segments for "
+                                 f"{t.size} poses (at most 100 per pose)")
     q = _quat_wxyz(quat_xyzw)
     # orientation flips (away and back by more than 90 degrees) are dropped before anything else
     flips = rotation_flips(t, R) if reject_outliers else np.zeros(t.size, dtype=bool)
     t_in, flip_warnings = t, dropped_warning(t, flips, "an orientation flip")
     if flips.any():
         t, P, R, q, w = (a[~flips] for a in (t, P, R, q, w))
-    if t.size < 2:
-        raise InputError(f"too few poses to fit: got {t.size}, need at least 2")
+    if np.count_nonzero(w) < 3:  # fewer leave the position's quadratic (the penalty's null space) free
+        raise InputError(f"too few poses to fit: got {np.count_nonzero(w)} with a positive weight, need at least 3")
     gap_warnings = check_rotation_steps(t, R)
     given = (r_order, r_dt, p_order, p_dt)
+    if "auto" in given:
+        checks.check_stamp_clusters(t)
     source = "auto" if isinstance(knot_spacing_s, str) else "given"
 
     def settings(wts):
@@ -446,6 +435,10 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
             # one grid: the finer spacing, the position's order (the accelerometer's)
             rdt = pdt = min(rdt, pdt)
             ro = po = max(ro, po)
+            if ch is not None:  # the predictions moved to that spacing
+                ch["predicted_gyro_rms_rad_s"] = prediction_at_spacing(ch["rotation"], rdt, 1)
+                ch["predicted_accel_rms_m_s2"] = float(np.hypot(prediction_at_spacing(ch["position"], pdt, 2),
+                                                                ch["accel_from_orientation_rms_m_s2"]))
         sig = (1e-3, 1e-3) if ch is None else tuple(max(ch[key]["cv_rms"] / np.sqrt(3.0), 1e-6)
                                                     for key in ("rotation", "position"))
         return ch, ro, layout(t[0], t[-1], rdt, ro), po, layout(t[0], t[-1], pdt, po), sig
@@ -506,7 +499,7 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
                      position_dt_s=lay_p[1], position_order=p_order)
     if bar is not None:
         bar.close()
-    keep = ~dropped
+    keep = ~dropped & (w > 0)  # the poses the fit followed: neither dropped nor given weight 0
     ep = np.linalg.norm(res_pos[keep], axis=1)
     ea = np.linalg.norm(res_rot[keep], axis=1)
     if choice is not None and kind == "split":
@@ -516,9 +509,11 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
     warnings = (prediction_warnings(choice, t) + flip_warnings + gap_warnings + warnings
                 + input_warnings(t, P, theta, res_pos, res_rot, keep, choice))
     if not conv:
+        why = ("; no step lowered the cost any more, as when the knots are too coarse for the turns between them: try "
+               "a finer knot spacing" if iters < max_iter else  # Levenberg-Marquardt gave up: more would not help
+               " (more iterations: fit(max_iter=...); or a coarser knot spacing)")
         warnings.append(FitWarning("fit_not_converged", f"the rotation fit stopped after {iters} iterations without "
-                                   "converging: the spline may not be the least-squares one (more iterations: "
-                                   "fit(max_iter=...); or a coarser knot spacing)"))
+                                   f"converging: the spline may not be the least-squares one{why}"))
     report = FitReport(
         kind=kind, order=r_order, knot_spacing_s=lay_r[1], knot_spacing_source=source, n_poses=int(t_in.size),
         n_control=lay_r[3], span_s=(float(t[0]), float(t[-1])),
@@ -589,7 +584,5 @@ def _solve(probs, Rc, kind, max_iter, tick, smoothness):
             res_pos = pos.position_residuals(Pc)
             Rc, res_rot, iters, conv = rot.solve_rotations(Rc, max_iter=max_iter, progress=tick)
     except np.linalg.LinAlgError:
-        raise SplineImuError(
-            f"the fit is singular at knot spacing {min(rot.dt, pos.dt):g} s with smoothness {smoothness:g}: use a "
-            "larger knot spacing or a positive smoothness") from None
+        raise SplineImuError(checks.singular_message(rot.t, rot.w, min(rot.dt, pos.dt), smoothness)) from None
     return Rc, Pc, res_pos, res_rot, iters, conv

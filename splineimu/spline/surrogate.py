@@ -94,3 +94,16 @@ def noise_surrogates(windows, k, dt_cv, seed=7, follow=True, also_flat=False):
         return out
 
     return (draw(slope), draw(0.0)) if also_flat else draw(slope)
+
+
+def prediction_at_spacing(c, dt, r):
+    """A choice's predicted error of the r-th derivative (``c``: the rotation's or position's entry
+    of :func:`splineimu.spline.knots.choose_knot_spacing`) at a finer spacing ``dt`` imposed by
+    another grid (``kind="se3"`` fits both on the finer of the two). The noise part of a smoother
+    of bandwidth 1/dt has a variance ~dt^-(2r+1); the bias part, which falls with dt, is kept (an
+    upper bound). Ellipse scene, 1 mm / 0.1 deg, SE3 at 0.31 s against the rotation's 0.83 s:
+    predicted gyro error 0.57 -> 2.5 mrad/s, measured 2.4 (20 Hz: 1.1 -> 5.7, measured 5.8)."""
+    if dt >= c["knot_spacing_s"]:
+        return c["predicted_rms"]
+    noise = c["predicted_noise_rms"] * (c["knot_spacing_s"] / dt) ** (r + 0.5)
+    return float(np.sqrt(noise**2 + max(c["predicted_rms"] ** 2 - c["predicted_noise_rms"] ** 2, 0.0)))
