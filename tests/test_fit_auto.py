@@ -487,3 +487,51 @@ def test_orientation_flips_are_dropped():
     assert got[0] <= 1.02 * ref[0] and got[1] <= 1.02 * ref[1], (got, ref)
     with pytest.raises(InputError, match=f"pose {one} .* orientation flip"):
         fit(t, p, lie.matrix_to_quat_xyzw(Rf), reject_outliers=False)
+
+
+def test_stalled_wide_rotation_knots_are_chosen_again_within_90_degrees():
+    """Six-position scene with 1 cm / 1 deg pose noise: the choice takes 667 ms rotation knots
+    (113 degrees of its fastest turn), where Gauss-Newton stalls on the control rotations beyond
+    the data (168 iterations, unconverged, gyro 0.039 rad/s). The rotation is then chosen again
+    within 90 degrees (513 ms): converged in 5, gyro 0.022 rad/s."""
+    from splineimu.spline.signals import max_rotation_spacing
+
+    sc, t, p, R = scene_poses("six-position", "white", 60.0, seed=0, scale=10.0)
+    spl, rep = fit(t, p, lie.matrix_to_quat_xyzw(R), return_report=True)
+    assert rep.converged and rep.knot_spacing_s <= max_rotation_spacing(t, R, np.pi / 2) * (1 + 1e-9)
+    assert "fit_not_converged" not in [w.code for w in rep.warnings]
+    te = np.arange(1.0, 59.0, 0.005)
+    err = float(np.sqrt(np.mean(np.sum((spl.imu(te)[0] - sc.imu(te)[0]) ** 2, axis=1))))
+    assert err < 0.03 and 1 / 3 <= rep.predicted_gyro_rms_rad_s / err <= 3, (err, rep.predicted_gyro_rms_rad_s)
+
+
+def test_given_spacing_with_automatic_order_is_kept():
+    """A given knot spacing with the order left automatic: the spacing is used as given (the
+    grid's range and refinement replaced it: 0.05 s became 0.063 s; outside the range the choice
+    crashed), and a spacing too long to choose an order over is refused with a clear error."""
+    from splineimu.errors import SplineImuError
+
+    sc, t, p, R = scene_poses("circle", "white", 20.0, rate_hz=100.0, seed=0)
+    q = lie.matrix_to_quat_xyzw(R)
+    for dt in (0.003, 0.05, 4.9):
+        _, rep = fit(t, p, q, knot_spacing_s=dt, return_report=True)
+        n = round((t[-1] - t[0]) / dt)
+        assert rep.knot_spacing_s == pytest.approx((t[-1] - t[0]) / n, rel=1e-9), (dt, rep.knot_spacing_s)
+        assert rep.position_knot_spacing_s == rep.knot_spacing_s
+    with pytest.raises(SplineImuError, match="give the order too"):
+        fit(t, p, q, knot_spacing_s=11.0)
+
+
+def test_a_gap_far_longer_than_the_data_is_scored_by_its_poses():
+    """20 s of poses, an hour without, 1 s more: 5% of the span from each end held almost every
+    pose, so nothing was scored (numpy warned about empty means) and the choice read noise."""
+    import warnings
+
+    t = np.r_[np.arange(0.0, 20.0, 0.01), 3620.0 + np.arange(0.0, 1.0, 0.01)]
+    k = make_scene("circle", duration_s=3700.0).kinematics(t)
+    rng = np.random.default_rng(1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        _, rep = fit(t, k.position_world + 1e-3 * rng.normal(size=(t.size, 3)),
+                     lie.matrix_to_quat_xyzw(k.world_R_body), return_report=True)
+    assert rep.knot_spacing_s > 1.0 and rep.position_knot_spacing_s > 0.5, rep.knot_spacing_s

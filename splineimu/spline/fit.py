@@ -56,7 +56,7 @@ from .controls import _increments_se3, _quat_wxyz, _to_matrices, _to_quats
 from .core import KINDS, Spline
 from .knots import _LADDER, MAX_CV_POSES, _windows, choose_knot_spacing, prediction_warnings
 from .report import FitReport, FitWarning
-from .signals import rotation_increments
+from .signals import MAX_CONTROL_TURN_RAD, max_rotation_spacing, rotation_increments
 from .surrogate import prediction_at_spacing
 
 #: Gauss-Newton stops when the largest update is below this (rad, or m for SE3 translation)
@@ -421,14 +421,14 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
         checks.check_stamp_clusters(t)
     source = "auto" if isinstance(knot_spacing_s, str) else "given"
 
-    def settings(wts):
+    def settings(wts, turn=MAX_CONTROL_TURN_RAD):
         """The knot choice (None if all is given), the (order, layout) of rotation and position,
         and the noise levels that weigh them."""
         ro, rdt, po, pdt = given
         ch = None
         if "auto" in given:
             ch = choose_knot_spacing(t, P, R, wts, ro, po, None if rdt == "auto" else rdt,
-                                     None if pdt == "auto" else pdt)
+                                     None if pdt == "auto" else pdt, turn)
             ro, rdt = ch["rotation"]["order"], ch["rotation"]["knot_spacing_s"]
             po, pdt = ch["position"]["order"], ch["position"]["knot_spacing_s"]
         if kind == "se3":
@@ -470,6 +470,13 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
     warnings = []
     for attempt in range(2):
         Rc, Pc, res_pos, res_rot, iters, conv = _solve(probs, Rc0, kind, max_iter, tick, smoothness)
+        if not conv and given[1] == "auto" and lay_r[1] > max_rotation_spacing(t, R, np.pi / 2):
+            # stalled with knots turning over 90 degrees (the ends extrapolate the turn through
+            # noise; six-position scene, 1 deg noise, 113 degrees): choose again within 90
+            choice, r_order, lay_r, p_order, lay_p, (sig_r, sig_p) = settings(probs[0].w, np.pi / 2)
+            probs = problems(probs[0].w)
+            Rc, Pc, res_pos, res_rot, iters, conv = _solve(probs, probs[0].initial_rotations(), kind, max_iter, tick,
+                                                           smoothness)
         if attempt == 1:
             break
         drop, warnings = classify_residuals(t, P, theta, res_pos, res_rot, probs[0].w)

@@ -102,10 +102,11 @@ from functools import cache
 import numpy as np
 
 from .._kernels import cv as _kcv
+from ..errors import SplineImuError
 from .banded import DEFAULT_SMOOTHNESS, SPARSE_SMOOTHNESS, difference_coefficients, layout
 from .basis import blending_matrix
 from .report import WARN_ACCEL_M_S2, WARN_GYRO_RAD_S, FitWarning
-from .signals import accumulate, max_rotation_spacing, rotation_increments
+from .signals import MAX_CONTROL_TURN_RAD, accumulate, max_rotation_spacing, rotation_increments
 from .surrogate import motion_limited, noise_surrogates
 
 ORDERS = (4, 5, 6)
@@ -164,6 +165,13 @@ class _Window:
         self.index = np.arange(n)
         lo, hi = t[0] + _END_FRACTION * (t[-1] - t[0]), t[-1] - _END_FRACTION * (t[-1] - t[0])
         self.scored = (t >= lo) & (t <= hi) & (w > 0)
+        weighted = np.flatnonzero(w > 0)
+        if 2 * np.count_nonzero(self.scored) < weighted.size:
+            # most poses within 5% of the span from its ends (a gap far longer than the data):
+            # the 5% of the weighted poses at each end are left out instead
+            m = max(int(_END_FRACTION * weighted.size), 1)
+            self.scored = np.zeros(n, dtype=bool)
+            self.scored[weighted[m:weighted.size - m]] = True
         self.scored_index = np.flatnonzero(self.scored)
         self.n_scored = int(self.scored_index.size)
         self.zero = np.zeros(n, dtype=np.int64)  # one fold
@@ -285,7 +293,7 @@ def _search(windows, orders, grid, block, lo, hi=np.inf):
             if strikes == 2:
                 break
         i = int(np.argmin(vals))
-        for dt in (grid[i] / np.sqrt(_STEP), grid[i] * np.sqrt(_STEP)):
+        for dt in (grid[i] / np.sqrt(_STEP), grid[i] * np.sqrt(_STEP)) if len(grid) > 1 else ():
             if lo <= dt <= hi:
                 score(k, dt)
     return table
@@ -376,6 +384,11 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
     span = min(wd.t[-1] - wd.t[0] for wd in windows)
     lo = 0.7 * h
     hi = max(min(span / 4.0, MAX_SPACING_S, dt_max), lo * 1.01)
+    if dt_fixed is not None:  # a given spacing is kept (only the order is chosen): the range takes it in
+        if span / float(dt_fixed) < 2:
+            raise SplineImuError(f"a knot spacing of {float(dt_fixed):g} s leaves fewer than 2 spacings over the "
+                                 f"{span:g} s the order is chosen on: give the order too")
+        lo, hi = min(lo, float(dt_fixed)), max(hi, float(dt_fixed))
     if dt_fixed is None:
         # steps of about _STEP up to _GRID_TOP_S, continued in the same steps beyond it
         top = max(min(hi, _GRID_TOP_S), lo * 1.01)
@@ -450,7 +463,7 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
         ladders[k] = ladder
         consider(k, ladder[1:], var, bias2, ends, dt_cv)
     if best is None:
-        raise ValueError("no knot spacing could be evaluated (too few poses for the orders?)")
+        raise SplineImuError("no knot spacing could be evaluated (too few poses for the orders?)")
     if dt_fixed is None and r == 2:
         # half a rung either side of the best, within the rungs tried (each against its own rung
         # below): near a steep rise of the bias the error changes by 20-30% per rung
@@ -497,7 +510,7 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
 
 
 def choose_knot_spacing(t, P, R, w=None, rotation_order="auto", position_order="auto",
-                        rotation_dt=None, position_dt=None):
+                        rotation_dt=None, position_dt=None, max_turn_rad=MAX_CONTROL_TURN_RAD):
     """Choose order and knot spacing of rotation and position from the poses.
 
     Parameters
@@ -509,6 +522,8 @@ def choose_knot_spacing(t, P, R, w=None, rotation_order="auto", position_order="
     rotation_order, position_order : int or "auto"
     rotation_dt, position_dt : float, optional
         Fixed spacings (only the order, if "auto", is then chosen).
+    max_turn_rad : float
+        The most the input may turn in one rotation knot spacing (step 5).
 
     Returns
     -------
@@ -519,7 +534,7 @@ def choose_knot_spacing(t, P, R, w=None, rotation_order="auto", position_order="
     w = np.ones(t.size) if w is None else np.asarray(w, dtype=np.float64)
     ro = ORDERS if rotation_order == "auto" else (int(rotation_order),)
     po = ORDERS if position_order == "auto" else (int(position_order),)
-    rot = choose_signal(t, rotation_increments(R), w, 1, ro, rotation_dt, max_rotation_spacing(t, R),
+    rot = choose_signal(t, rotation_increments(R), w, 1, ro, rotation_dt, max_rotation_spacing(t, R, max_turn_rad),
                         increments=True)
     pos = choose_signal(t, np.ascontiguousarray(P), w, 2, po, position_dt)
     # an orientation error dtheta (isotropic) turns the specific force f by f x dtheta: RMS

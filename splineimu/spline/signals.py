@@ -15,9 +15,9 @@ from .. import lie
 MAX_CONTROL_TURN_RAD = 0.75 * np.pi
 
 
-def max_rotation_spacing(t, R):
-    """Largest rotation knot spacing over which the input turns by at most
-    :data:`MAX_CONTROL_TURN_RAD` anywhere (neighbouring control rotations must stay well within
+def max_rotation_spacing(t, R, limit=MAX_CONTROL_TURN_RAD):
+    """Largest rotation knot spacing over which the input turns by at most ``limit`` (default
+    :data:`MAX_CONTROL_TURN_RAD`) anywhere (neighbouring control rotations must stay well within
     the shortest-turn range of their increments). Angles are measured over the spacing itself,
     so pose noise does not shrink the limit."""
     n = t.size
@@ -35,16 +35,16 @@ def max_rotation_spacing(t, R):
             return True
         tr = np.einsum("ij,ij->i", Rf[:-m], Rf[m:])
         ang = float(np.arccos(np.clip((np.min(tr[ok]) - 1.0) / 2.0, -1.0, 1.0)))
-        if abs(ang - MAX_CONTROL_TURN_RAD) < 1e-6:
+        if abs(ang - limit) < 1e-6:
             ang = float(np.max(np.linalg.norm(lie.so3_log(np.matmul(np.swapaxes(R[:-m][ok], 1, 2), R[m:][ok])),
                                               axis=1)))
-        return ang <= MAX_CONTROL_TURN_RAD
+        return ang <= limit
 
     if n < 2 or not within(1):
         return 0.7 * h
     # grow by at most pi / limit: a turn within the limit over m poses is then below pi over the
     # next m (the angle from the trace wraps beyond pi)
-    grow = min(2.0, np.pi / MAX_CONTROL_TURN_RAD)
+    grow = min(2.0, np.pi / limit)
     m = 1
     while (nxt := max(m + 1, int(m * grow))) < n and within(nxt):
         m = nxt
