@@ -363,3 +363,19 @@ def test_poses_of_weight_zero_are_not_in_the_residuals():
         warnings.simplefilter("error")
         _, rep = fit(t, p, q, weights=w, order=4, knot_spacing_s=0.1, return_report=True)
     assert rep.residual_position_rms_m < 1e-9  # three poses: interpolated
+
+
+@pytest.mark.parametrize("kind", ["split", "se3"])
+def test_georeferenced_positions_fit_as_local_ones(kind):
+    """UTM-sized coordinates (5e6 m) round at 1e-9 m, where the SE3 Gauss-Newton steps stop:
+    the fit runs about the first position, so the offset changes neither the iterations (SE3 on
+    misc/georeferenced.tum: 29 -> 19, as without the offset) nor the motion."""
+    t, p, q = ellipse_poses(400, 1e-3, np.deg2rad(0.1), duration=20.0)
+    offset = np.array([458074.6, 5429380.2, 162.9])
+    a, ra = fit(t, p, q, kind=kind, return_report=True)
+    b, rb = fit(t, p + offset, q, kind=kind, return_report=True)
+    assert ra.iterations == rb.iterations and (ra.order, ra.knot_spacing_s) == (rb.order, rb.knot_spacing_s)
+    ti = np.linspace(0.5, 19.5, 300)
+    np.testing.assert_allclose(b.pose(ti)[0] - offset, a.pose(ti)[0], rtol=0, atol=1e-8)
+    for x, y in zip(a.imu(ti), b.imu(ti)):
+        np.testing.assert_allclose(y, x, rtol=0, atol=1e-6)

@@ -413,6 +413,10 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
     t_in, flip_warnings = t, dropped_warning(t, flips, "an orientation flip")
     if flips.any():
         t, P, R, q, w = (a[~flips] for a in (t, P, R, q, w))
+    # fitted about the first position (exactly, nearby floats): georeferenced input (UTM, 5e6 m)
+    # rounds at 1e-9 m, where the SE3 steps stop (it took 60-90 iterations instead of 5)
+    offset = P[0].copy()
+    P = P - offset
     if np.count_nonzero(w) < 3:  # fewer leave the position's quadratic (the penalty's null space) free
         raise InputError(f"too few poses to fit: got {np.count_nonzero(w)} with a positive weight, need at least 3")
     gap_warnings = check_rotation_steps(t, R)
@@ -500,9 +504,9 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
         _, warnings = classify_residuals(t, P, theta, res_pos, res_rot, probs[0].w)
         warnings = dropped_warning(t, dropped) + warnings
     if kind == "se3":
-        spl = Spline(lay_r[0], lay_r[1], Pc, Rc, kind, r_order, origin_ns)
+        spl = Spline(lay_r[0], lay_r[1], Pc + offset, Rc, kind, r_order, origin_ns)
     else:
-        spl = Spline(lay_r[0], lay_r[1], Pc, Rc, kind, r_order, origin_ns, position_t0_s=lay_p[0],
+        spl = Spline(lay_r[0], lay_r[1], Pc + offset, Rc, kind, r_order, origin_ns, position_t0_s=lay_p[0],
                      position_dt_s=lay_p[1], position_order=p_order)
     if bar is not None:
         bar.close()
