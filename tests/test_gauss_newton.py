@@ -175,29 +175,35 @@ def _spline_rotations(Rc, order, t0, dt, t):
     return lie.quat_xyzw_to_matrix(spl.pose(t)[1])
 
 
+_INIT_N = 24
+
+
+def _init_error(Rc, order, dt=0.1):
+    """Largest angle between the control rotations Rc (_INIT_N, 3, 3) and the quasi-interpolant
+    of their spline's poses at the control times, away from the ends."""
+    n = _INIT_N
+    tc = (np.arange(n) - (order - 2) / 2.0) * dt
+    nseg = n - order + 1
+    inside = (tc >= 0.0) & (tc <= nseg * dt)
+    t = np.unique(np.r_[0.0, tc[inside], nseg * dt])
+    q = _wxyz(_spline_rotations(Rc, order, 0.0, dt, t))
+    out = np.empty((n, 4))
+    _gn.control_grid_init(t, q, tc, *_quasi_interpolant(order), out)
+    e = np.linalg.norm(lie.so3_log(np.swapaxes(Rc, 1, 2) @ lie.quat_xyzw_to_matrix(out[:, [1, 2, 3, 0]])), axis=1)
+    first, last = np.flatnonzero(inside)[[0, -1]]
+    return float(e[first + 2: last - 1].max())
+
+
 @pytest.mark.parametrize("order", [3, 4, 5, 6])
 def test_control_grid_init_inverts_the_smoothing(order):
     """About a fixed axis the spline is an ordinary B-spline of the angle: for control angles
     that are a polynomial of degree 5 in the index, poses at the control times give back the
     control rotations exactly (the quasi-interpolant's error is a sixth difference); turning
     about all axes, the error is second order in the turn per knot."""
-    n, dt, t0 = 24, 0.1, 0.0
-    tc = t0 + (np.arange(n) - (order - 2) / 2.0) * dt
-    nseg = n - order + 1
-    inside = (tc >= t0) & (tc <= t0 + nseg * dt)
-    t = np.unique(np.r_[t0, tc[inside], t0 + nseg * dt])
-    i = np.arange(n) / n
+    i = np.arange(_INIT_N) / _INIT_N
     axis = np.array([1.0, 2.0, 2.0]) / 3.0
-    errs = []
-    for Rc in (lie.so3_exp(np.outer(3.0 * i - 2.0 * i**3 + 4.0 * i**5, axis)),
-               lie.so3_exp(np.c_[np.sin(3 * i), np.cos(5 * i), 4 * i] * 0.5)):
-        q = _wxyz(_spline_rotations(Rc, order, t0, dt, t))
-        out = np.empty((n, 4))
-        _gn.control_grid_init(t, q, tc, *_quasi_interpolant(order), out)
-        e = np.linalg.norm(lie.so3_log(np.swapaxes(Rc, 1, 2) @ lie.quat_xyzw_to_matrix(out[:, [1, 2, 3, 0]])),
-                           axis=1)
-        first, last = np.flatnonzero(inside)[[0, -1]]
-        errs.append(e[first + 2: last - 1].max())
+    errs = [_init_error(Rc, order) for Rc in (lie.so3_exp(np.outer(3.0 * i - 2.0 * i**3 + 4.0 * i**5, axis)),
+                                              lie.so3_exp(np.c_[np.sin(3 * i), np.cos(5 * i), 4 * i] * 0.5))]
     assert errs[0] < 1e-13 and errs[1] < 2e-4, errs  # measured < 1.5e-15, < 6.2e-5
 
 
@@ -208,20 +214,10 @@ def test_control_grid_init_unwraps_turns_beyond_pi(order):
     stays exact about a fixed axis (it was off by radians, and Gauss-Newton stalled from there:
     the flips scene with 1 cm / 1 deg AR(1) noise at 125 ms knots, 137 iterations unconverged,
     now 7)."""
-    n, dt, t0 = 24, 0.1, 0.0
-    tc = t0 + (np.arange(n) - (order - 2) / 2.0) * dt
-    nseg = n - order + 1
-    inside = (tc >= t0) & (tc <= t0 + nseg * dt)
-    t = np.unique(np.r_[t0, tc[inside], t0 + nseg * dt])
-    i = np.arange(n) / n
+    j = np.arange(_INIT_N)
     # steps from 60 to 133 degrees: two steps cross pi on one side of a control, not the other
-    Rc = lie.so3_exp(np.outer(1.05 * n * i + 0.0276 * (n * i) ** 2, np.array([1.0, 2.0, 2.0]) / 3.0))
-    q = _wxyz(_spline_rotations(Rc, order, t0, dt, t))
-    out = np.empty((n, 4))
-    _gn.control_grid_init(t, q, tc, *_quasi_interpolant(order), out)
-    e = np.linalg.norm(lie.so3_log(np.swapaxes(Rc, 1, 2) @ lie.quat_xyzw_to_matrix(out[:, [1, 2, 3, 0]])), axis=1)
-    first, last = np.flatnonzero(inside)[[0, -1]]
-    assert e[first + 2: last - 1].max() < 1e-12, e  # measured < 1e-14
+    Rc = lie.so3_exp(np.outer(1.05 * j + 0.0276 * j**2, np.array([1.0, 2.0, 2.0]) / 3.0))
+    assert _init_error(Rc, order) < 1e-12  # measured < 1e-14
 
 
 def test_band_factored_solve_reuses_the_factor():
