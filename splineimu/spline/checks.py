@@ -36,7 +36,7 @@ import numpy as np
 from .. import lie
 from ..errors import InputError, SplineImuError
 from .basis import MAX_ORDER, MIN_ORDER
-from .report import FitWarning
+from .report import WARN_ACCEL_M_S2, WARN_GYRO_RAD_S, FitWarning
 from .surrogate import motion_limited
 
 OUTLIER_SIGMAS = 8.0
@@ -403,9 +403,10 @@ def _top_octave_fraction(t, X, r):
     return float(P[P.size // 2:].sum() / max(P.sum(), 1e-300))
 
 
-def input_warnings(t, P, theta, res_pos, res_rot, keep, choice=None):
-    """Warnings about the whole input: residuals far above the pose noise, and poses too sparse
-    for the motion they hold (see the module docstring)."""
+def input_warnings(t, P, theta, res_pos, res_rot, keep, choice=None, spacings=None):
+    """Warnings about the whole input: residuals far above the pose noise, poses too sparse for
+    the motion they hold (see the module docstring), and given knot ``spacings`` ({"rotation":
+    s, "position": s}) so fine for noisy poses that the noise alone makes the IMU error large."""
     out = []
     if t.size < 64:
         return out
@@ -421,9 +422,23 @@ def input_warnings(t, P, theta, res_pos, res_rot, keep, choice=None):
             out.append(FitWarning("residual_above_noise", f"the {key} fit residual ({rms:.3g} {unit} RMS) is "
                                   f"{ratio} the {how} pose noise ({noise:.3g} {unit}): the knot spacing "
                                   f"is too coarse for the motion, or the poses hold steps"))
+    limited = {key: choice[key]["motion_limited"] if choice is not None else motion_limited(X)
+               for key, X, *_ in parts}
+    h = float(np.median(np.diff(t)))
+    for key, X, _, unit, r, imu in parts if choice is None and spacings and np.count_nonzero(keep) >= 64 else ():
+        # the derivative of white pose noise of norm n: sqrt(2) n / h (rate) or sqrt(6) n / h^2
+        # (acceleration) for knots at the pose spacing h, less by (h / spacing)^(r + 1/2) for
+        # coarser ones (ellipse, 100 Hz, 1 mm / 0.1 deg, order 4 at 1-30 ms: 0.5-0.9x measured)
+        n = _diff_noise(X[keep])
+        est = np.sqrt(2.0 if r == 1 else 6.0) * n / h**r * min(1.0, h / spacings[key]) ** (r + 0.5)
+        lim = WARN_GYRO_RAD_S if r == 1 else WARN_ACCEL_M_S2
+        if not limited[key] and est > lim:
+            out.append(FitWarning("knots_follow_noise", f"the given {key} knot spacing ({1e3 * spacings[key]:.3g} ms, "
+                                  f"poses every {1e3 * h:.3g} ms) follows the pose noise ({n:.3g} {unit} from third "
+                                  f"differences): the {imu} error from it alone is ~{est:.3g} {unit}/s"
+                                  f"{'' if r == 1 else '^2'} (a coarser spacing, or the automatic choice, smooths it)"))
     # the spectra only where the input is motion-limited (the choice has already said so)
-    frac = {key: _top_octave_fraction(t, X, r) for key, X, _, _, r, _ in parts
-            if (choice[key]["motion_limited"] if choice is not None else motion_limited(X))}
+    frac = {key: _top_octave_fraction(t, X, r) for key, X, _, _, r, _ in parts if limited[key]}
     hit = [(key, imu) for key, _, _, _, _, imu in parts if frac.get(key, 0.0) > TOP_OCTAVE_POWER]
     if hit:
         nyq = 0.5 / float(np.median(np.diff(t)))

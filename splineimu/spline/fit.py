@@ -517,8 +517,8 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
         _rotation_bias(choice, probs[0], Rc, max_iter)
     pred_g = choice["predicted_gyro_rms_rad_s"] if choice else None
     pred_a = choice["predicted_accel_rms_m_s2"] if choice else None
-    warnings = (prediction_warnings(choice, t) + flip_warnings + gap_warnings + warnings
-                + input_warnings(t, P, theta, res_pos, res_rot, keep, choice))
+    warnings = (prediction_warnings(choice, t) + flip_warnings + gap_warnings + warnings + input_warnings(
+        t, P, theta, res_pos, res_rot, keep, choice, {"rotation": lay_r[1], "position": lay_p[1]}))
     if not conv:
         why = ("; no step lowered the cost any more, as when the knots are too coarse for the turns between them: try "
                "a finer knot spacing" if iters < max_iter else  # Levenberg-Marquardt gave up: more would not help
