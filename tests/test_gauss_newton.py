@@ -13,7 +13,7 @@ from splineimu._kernels import gauss_newton as _gn
 from splineimu.spline import banded
 from splineimu.spline.basis import blending_matrix
 from splineimu.spline.controls import _increments_so3
-from splineimu.spline.fit import _quasi_interpolant
+from splineimu.spline.problem import _quasi_interpolant
 
 
 def _wxyz(R):
