@@ -191,7 +191,7 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
             bar.update(1)
 
     def problems(wts):
-        args = (float(smoothness), 1.0 / sig_r**2, 1.0 / sig_p**2)
+        args = (float(smoothness), 1.0 / sig_r**2, 1.0 / sig_p**2, None if choice is None else sig_r)
         return (_Problem(t, P, R, q, wts, r_order, *lay_r[:3], *args),
                 _Problem(t, P, R, q, wts, p_order, *lay_p[:3], *args))
 
@@ -294,7 +294,8 @@ def _rotation_bias(choice, rot, Rc_fit, max_iter):
         if n == rot.t.size and lay[:3] == (rot.t0, rot.dt, rot.nseg):
             Rc = Rc_fit  # the check covers every pose: this is the fit itself
         else:
-            sub = _Problem(t, rot.P[sl], rot.R[sl], rot.q[sl], w, k, *lay[:3], rot.smoothness, rot.w_rot, rot.w_pos)
+            sub = _Problem(t, rot.P[sl], rot.R[sl], rot.q[sl], w, k, *lay[:3], rot.smoothness, rot.w_rot, rot.w_pos,
+                           rot.noise_rad)
             Rc, _, _, conv = sub.solve_rotations(sub.initial_rotations(), max_iter=max_iter)
             if not conv:
                 return
