@@ -411,12 +411,14 @@ def input_warnings(t, P, theta, res_pos, res_rot, keep, choice=None, spacings=No
     if t.size < 64:
         return out
     parts = (("position", P, res_pos, "m", 2, "accel"), ("rotation", theta, res_rot, "rad", 1, "gyro"))
-    for key, X, res, unit, _, _ in parts if np.count_nonzero(keep) >= 64 else ():  # few weighted: no level
+    enough = np.count_nonzero(keep) >= 64  # fewer weighted poses: no noise level
+    diff_noise = {key: _diff_noise(X[keep]) for key, X, *_ in parts} if enough and choice is None else {}
+    for key, _, res, unit, _, _ in parts if enough else ():
         rms = float(np.sqrt(np.mean(np.sum(res[keep] ** 2, axis=1))))
         if choice is not None:
             noise, lim, how = choice[key]["cv_rms"], RESIDUAL_OVER_NOISE, "cross-validated"
         else:
-            noise, lim, how = _diff_noise(X[keep]), RESIDUAL_OVER_DIFF_NOISE, "third-difference"
+            noise, lim, how = diff_noise[key], RESIDUAL_OVER_DIFF_NOISE, "third-difference"
         if rms > lim * max(noise, 1e-12) and rms > RESIDUAL_FLOOR:
             ratio = f"{rms / noise:.1f}x" if noise > 0 else "far above"  # exact poses: no noise at all
             out.append(FitWarning("residual_above_noise", f"the {key} fit residual ({rms:.3g} {unit} RMS) is "
@@ -425,11 +427,11 @@ def input_warnings(t, P, theta, res_pos, res_rot, keep, choice=None, spacings=No
     limited = {key: choice[key]["motion_limited"] if choice is not None else motion_limited(X)
                for key, X, *_ in parts}
     h = float(np.median(np.diff(t)))
-    for key, X, _, unit, r, imu in parts if choice is None and spacings and np.count_nonzero(keep) >= 64 else ():
+    for key, _, _, unit, r, imu in parts if diff_noise and spacings else ():
         # the derivative of white pose noise of norm n: sqrt(2) n / h (rate) or sqrt(6) n / h^2
         # (acceleration) for knots at the pose spacing h, less by (h / spacing)^(r + 1/2) for
         # coarser ones (ellipse, 100 Hz, 1 mm / 0.1 deg, order 4 at 1-30 ms: 0.5-0.9x measured)
-        n = _diff_noise(X[keep])
+        n = diff_noise[key]
         est = np.sqrt(2.0 if r == 1 else 6.0) * n / h**r * min(1.0, h / spacings[key]) ** (r + 0.5)
         lim = WARN_GYRO_RAD_S if r == 1 else WARN_ACCEL_M_S2
         if not limited[key] and est > lim:
