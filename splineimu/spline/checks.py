@@ -37,7 +37,7 @@ from .. import lie
 from ..errors import InputError, SplineImuError
 from .basis import MAX_ORDER, MIN_ORDER
 from .report import WARN_ACCEL_M_S2, WARN_GYRO_RAD_S, FitWarning
-from .surrogate import motion_limited
+from .surrogate import band_power, motion_limited
 
 OUTLIER_SIGMAS = 8.0
 OUTLIER_FLOOR_M = 2e-3
@@ -398,8 +398,7 @@ def _diff_noise(X):
 def _top_octave_fraction(t, X, r):
     """Share of the power of the r-th difference quotient of X in the top octave of the band."""
     h = float(np.median(np.diff(t)))
-    d = np.diff(X, r, axis=0) / h**r
-    P = (np.abs(np.fft.rfft(d - d.mean(axis=0), axis=0)) ** 2).sum(axis=1)
+    P = band_power(np.diff(X, r, axis=0) / h**r)
     return float(P[P.size // 2:].sum() / max(P.sum(), 1e-300))
 
 
