@@ -227,9 +227,10 @@ def test_one_hour_of_exact_poses_stays_at_rounding_level():
     against 1.1e-8 rad/s: the rotation signal is summed from zero in each cross-validated
     window; summed over the hour its rounding, ~1e-13 rad a step, read as noise and gave 21 ms
     knots and 4.9e-8). The accel is limited by the scene's own float64 rounding, which grows
-    with time (sin(w t) at t = 3600 s: ~4e-13 m of position jitter): 1.3e-7 m/s^2 at 1 h
-    against 3.4e-9 at 1 min; the best fixed setting at 1 h reaches 2.1e-8 (order 6, 11 ms), 6x
-    the minute, so no spacing meets 2x on exact input (a known gap, kept visible here)."""
+    with time (sin(w t) at t = 3600 s: ~4e-13 m of position jitter; float64 seconds at 3600 s
+    are 4.5e-13 s apart): 9.6e-8 m/s^2 at 1 h against 3.7e-9 at 1 min (1.3e-7 before the grid
+    past 2 s and the 135-degree turn limit); the best fixed setting at 1 h reaches 2.1e-8 (order
+    6, 11 ms), 6x the minute, so no spacing meets 2x on exact input (a known gap, kept visible)."""
     errs = {dur: imu_errors(fit(*poses("clean", dur)), dur) for dur in (60.0, 3600.0)}
     assert errs[3600.0][0] <= 2.0 * errs[60.0][0] and errs[3600.0][1] <= 3e-7, errs
     assert errs[60.0][0] <= 3e-8 and errs[60.0][1] <= 1e-8, errs
