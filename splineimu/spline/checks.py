@@ -190,7 +190,7 @@ def check_rotation_steps(t, R):
                 "(the default), which drops them")
         raise InputError(
             f"poses {i} and {i + 1} (t = {t[i]:.6f} s and {t[i + 1]:.6f} s) rotate by {np.degrees(ang[i]):.1f} deg: "
-            f"more than {np.degrees(MAX_STEP_ANGLE_RAD):.0f} deg between consecutive poses cannot be told from "
+            f"{np.degrees(MAX_STEP_ANGLE_RAD):.0f} deg or more between consecutive poses cannot be told from "
             "the opposite turn; record or export the poses at a higher rate")
     return [FitWarning("gap_turn_ambiguous", f"the poses turn by {np.degrees(ang[i]):.0f} deg across the gap from "
                        f"{t[i]:.3f} s to {t[i + 1]:.3f} s: the fit bridges it with the shortest turn",
