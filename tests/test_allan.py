@@ -389,3 +389,15 @@ def test_small_nnls_and_chi2_quantiles_match_scipy():
     nu = np.array([0.3, 1.0, 2.5, 17.0, 1e3, 1e6])
     for q in (0.025, 0.975):
         np.testing.assert_allclose(_chi2_ppf(q, nu), chi2.ppf(q, nu), rtol=1e-10)  # scipy 1.13-1.14 differ by 1.2e-11
+
+
+def test_dense_cluster_grid_is_every_integer_without_the_memory():
+    """--points-per-decade 1e9 asked np.logspace for 3e9 points (the process was killed for
+    memory); past ~2 m_max ln(m_max) points the grid is every integer 1..m_max anyway."""
+    from splineimu.allan.deviation import default_cluster_factors
+
+    m = default_cluster_factors(1_000_001, 1e9)
+    np.testing.assert_array_equal(m, np.arange(1, 250_001))
+    np.testing.assert_array_equal(default_cluster_factors(2001, 1e300), np.arange(1, 501))
+    np.testing.assert_array_equal(default_cluster_factors(2001, 5000), np.arange(1, 501))  # dense enough already
+    assert default_cluster_factors(1000, 5)[:6].tolist() == [1, 2, 3, 4, 6, 10]
