@@ -497,3 +497,32 @@ def test_imu_csv_stamp_beyond_int64_is_named_without_a_pandas_warning(tmp_path):
         with pytest.raises(InputError, match=r"imu\.csv:3: time stamp must be integer nanoseconds"):
             read_imu_csv(p)
     assert not [w for w in seen if issubclass(w.category, RuntimeWarning)], [str(w.message) for w in seen]
+
+
+def test_groundtruth_errors_do_not_call_the_file_imu_data(tmp_path):
+    """EuRoC's ground-truth header names its bias columns b_w_RS_S_x and b_a_RS_S_x: the format
+    guess matched the IMU's w_RS_S / a_RS_S first, and every error in a ground truth ended with
+    'the file looks like a EuRoC IMU csv ... it is IMU data, not poses'."""
+    from splineimu.io.euroc import EUROC_GROUNDTRUTH_HEADER
+    from splineimu.io.sniff import guess_format
+
+    rows = [f"{i * 5000000},0,0,0,1,0,0,0" + ",0" * 9 for i in range(5)]
+    rows[1] = "5000000,0,0,0,0,0,0,0" + ",0" * 9
+    p = tmp_path / "gt.csv"
+    p.write_text("\n".join([EUROC_GROUNDTRUTH_HEADER, *rows]) + "\n")
+    assert guess_format(p) == "euroc_gt"
+    with pytest.raises(InputError) as e:
+        read_euroc_groundtruth(p)
+    assert str(e.value) == f"{p}:3: quaternion has zero norm: [0, 0, 0, 0]"
+
+
+def test_too_few_columns_names_only_the_columns_expected(tmp_path):
+    """A short row of a ground truth read as 8 columns listed all 17 EuRoC names after
+    'expected 8 columns'."""
+    p = tmp_path / "gt.csv"
+    p.write_text("0,1,2,3,1,0,0,0\n5000000,1,2,3\n")
+    with pytest.raises(InputError) as e:
+        read_euroc_groundtruth(p)
+    msg = str(e.value)
+    assert "expected 8 columns (timestamp p_RS_R_x p_RS_R_y p_RS_R_z q_RS_w q_RS_x q_RS_y q_RS_z), got 4" in msg
+    assert "v_RS_R_x" not in msg and msg.startswith(f"{p}:2:")

@@ -74,10 +74,11 @@ def guess_format(path) -> str | None:
         return None
     n = min(len(r) for r in rows)
     integer_stamps = all(r[0].lstrip("+-").isdigit() for r in rows)
-    if "w_RS_S" in header or "a_RS_S" in header:
-        return "euroc_imu"
+    # first: the ground truth's bias columns b_w_RS_S_x, b_a_RS_S_x contain the IMU's names
     if "p_RS_R" in header or "q_RS" in header:
         return "euroc_gt"
+    if "w_RS_S" in header or "a_RS_S" in header:
+        return "euroc_imu"
     if comma and integer_stamps:
         if n == 7:
             return "euroc_imu"
