@@ -641,3 +641,17 @@ def test_cli_on_real_euroc(shared_data, tmp_path):
     assert df["err_p_m"].max() < 0.1  # per 1 s window (measured 0.050 m)
     assert df["err_v_m_s"].max() < 0.2  # (measured 0.10 m/s)
     assert df["err_theta_deg"].max() < 0.5  # (measured 0.26 deg)
+
+
+def test_noise_free_folder_says_why_there_is_no_nees(tmp_path, capsys):
+    """A noise-free scene's imu.yaml has all densities 0: the covariance is zero, and the
+    windows without NEES were put down to 'too few samples' (they had 201 each)."""
+    from splineimu.cli import main
+
+    out = tmp_path / "o"
+    assert main(["scene", "static", "--duration", "3", "-o", str(out)]) == 0
+    capsys.readouterr()
+    assert main(["preintegrate", str(out), "--every", "200"]) == 0
+    text = capsys.readouterr().out
+    assert "3 windows without NEES (the noise densities are all 0)" in text
+    assert "too few samples" not in text

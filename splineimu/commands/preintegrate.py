@@ -82,7 +82,8 @@ def run(args) -> int:
           f"theta {df['err_theta_deg'].max():.3e} deg")
     if res.noise is not None:
         if res.n_nees < len(df):
-            print(f"{len(df) - res.n_nees} windows without NEES (singular covariance: too few samples)")
+            why = "the noise densities are all 0" if res.noise_free else "singular covariance: too few samples"
+            print(f"{len(df) - res.n_nees} windows without NEES ({why})")
         test = res.nees_test()
         if test is not None:
             print(f"mean NEES {test.mean:.3f} (9 dof; 95% interval for {test.n_windows} windows "

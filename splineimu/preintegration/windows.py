@@ -117,6 +117,12 @@ class WindowResult:
         """Number of windows with a NEES."""
         return int(np.isfinite(self.nees).sum())
 
+    @property
+    def noise_free(self) -> bool:
+        """The noise densities are all zero (a noise-free recording's imu.yaml): the covariance
+        is zero and no window has a NEES."""
+        return self.noise is not None and all(not np.any(np.asarray(self.noise[k])) for k in KALIBR_KEYS)
+
     def nees_test(self) -> NeesTest | None:
         """Mean 9-dof NEES of the windows that have one, against its 95 % chi-square interval.
 
