@@ -655,3 +655,14 @@ def test_noise_free_folder_says_why_there_is_no_nees(tmp_path, capsys):
     text = capsys.readouterr().out
     assert "3 windows without NEES (the noise densities are all 0)" in text
     assert "too few samples" not in text
+
+
+def test_window_stamps_outside_the_span_say_where_they_are():
+    """--stamps in another unit (1e9 in a file read as seconds) only said 'fewer than 2 stamps
+    inside the span': the message now shows the span the given stamps cover."""
+    from splineimu.preintegration import make_windows
+
+    t = np.arange(0, 10_000_000_001, 5_000_000)
+    with pytest.raises(ConfigError) as e:
+        make_windows(t, t, stamps_ns=np.array([0, 10**18, 2 * 10**18]))
+    assert str(e.value).endswith("span [0, 10000000000] ns (the 3 given span [0, 2000000000000000000] ns)")

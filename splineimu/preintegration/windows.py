@@ -291,10 +291,11 @@ def make_windows(imu_t_ns, gt_t_ns, every=None, stamps_ns=None) -> np.ndarray:
     lo = max(int(imu_t_ns[0]), int(gt_t_ns[0]))
     hi = min(int(imu_t_ns[-1]), int(gt_t_ns[-1]))
     if stamps_ns is not None:
-        s = np.asarray(stamps_ns, dtype=np.int64)
-        s = s[(s >= lo) & (s <= hi)]
+        given = np.asarray(stamps_ns, dtype=np.int64)
+        s = given[(given >= lo) & (given <= hi)]
         if s.size < 2:
-            raise ConfigError(f"fewer than 2 stamps inside the IMU and ground-truth span [{lo}, {hi}] ns")
+            got = f"the {given.size} given span [{given.min()}, {given.max()}] ns" if given.size else "none given"
+            raise ConfigError(f"fewer than 2 stamps inside the IMU and ground-truth span [{lo}, {hi}] ns ({got})")
         return np.stack([s[:-1], s[1:]], axis=1)
     t = imu_t_ns[(imu_t_ns >= lo) & (imu_t_ns <= hi)]
     if t.size < 2:
