@@ -37,7 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import ConfigError, InputError, SplineImuError
-from .validation import as_quat_xyzw, as_times_s, as_vectors, nonnegative_float, one_of, positive_float
+from .validation import as_quat_xyzw, as_times_s, as_vectors, finite_float, nonnegative_float, one_of, positive_float
 
 __all__ = ["MetricResult", "CompareResult", "compare", "check_compare_options", "EVO_MISSING", "POSE_RELATIONS",
            "ALIGN_MODES", "DELTA_UNITS"]
@@ -220,7 +220,8 @@ def _frames_from_seconds(timestamps, delta_s) -> int:
 
 
 def check_compare_options(metric: str = "ape", pose_relation: str = "trans", align: str = "none",
-                          delta: float = 1.0, delta_unit: str = "f", t_max_diff: float = 0.01) -> tuple:
+                          delta: float = 1.0, delta_unit: str = "f", t_max_diff: float = 0.01,
+                          t_offset: float = 0.0) -> tuple:
     """The checks of :func:`compare`'s options; returns ``(delta, t_max_diff)`` as floats.
 
     Raises
@@ -235,6 +236,7 @@ def check_compare_options(metric: str = "ape", pose_relation: str = "trans", ali
     delta = positive_float(delta, "delta")
     if delta_unit == "f" and float(delta) != int(delta):
         raise ConfigError(f"RPE delta in frames must be a whole number, got {delta}", option="delta")
+    finite_float(t_offset, "t_offset")  # NaN associated nothing and was reported as "no matching timestamps"
     return delta, nonnegative_float(t_max_diff, "t_max_diff")
 
 
@@ -293,7 +295,8 @@ def compare(est, ref, *, metric: str = "ape", pose_relation: str = "trans", alig
     0.1
     """
     metrics, sync, _, _ = _evo()
-    delta, t_max_diff = check_compare_options(metric, pose_relation, align, delta, delta_unit, t_max_diff)
+    delta, t_max_diff = check_compare_options(metric, pose_relation, align, delta, delta_unit, t_max_diff,
+                                              t_offset)
     relation = getattr(metrics.PoseRelation, POSE_RELATIONS[pose_relation])
 
     traj_est = _as_evo(est, "est")

@@ -269,3 +269,29 @@ def test_real_trajectories_equal_evo(name, tmp_path):
         theirs = run_evo("ape", ["tum", str(ref), str(est), *EVO_ALIGN[align]])
         theirs += run_evo("rpe", ["tum", str(ref), str(est), *EVO_ALIGN[align], "-d", "2"])
         assert ours.pretty_str() + "\n" == theirs
+
+
+def test_nan_time_offset_is_refused_by_name(tmp_path):
+    """--t-offset nan reached evo and was reported as 'found no matching timestamps'."""
+    from splineimu.metrics import check_compare_options
+
+    with pytest.raises(ConfigError, match="`t_offset` must be finite, got nan"):
+        check_compare_options(t_offset=float("nan"))
+    ref = tmp_path / "ref.tum"
+    ref.write_text("".join(f"{i}.0 {i} 0 0 0 0 0 1\n" for i in range(5)))
+    with pytest.raises(ConfigError, match="t_offset"):
+        compare_files(ref, ref, t_offset=float("nan"))
+
+
+def test_a_euroc_csv_given_to_compare_is_named(tmp_path):
+    """A EuRoC ground truth or IMU csv given to compare got evo's 'TUM trajectory files must
+    have 8 entries per row' only; the message now says what the file looks like and what to give."""
+    gt = tmp_path / "data.csv"
+    gt.write_text("#timestamp, p_RS_R_x [m], p_RS_R_y [m], p_RS_R_z [m], q_RS_w []\n"
+                  + "".join(f"{i * 5000000},0,0,0,1,0,0,0" + ",0" * 9 + "\n" for i in range(5)))
+    ref = tmp_path / "ref.tum"
+    ref.write_text("".join(f"{i}.0 {i} 0 0 0 0 0 1\n" for i in range(5)))
+    with pytest.raises(InputError) as e:
+        compare_files(gt, ref)
+    assert str(e.value).endswith("the file looks like a EuRoC ground-truth csv (ns, p xyz, q wxyz, ...): "
+                                 "compare reads TUM trajectories, e.g. OUT/groundtruth.tum")

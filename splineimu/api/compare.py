@@ -34,7 +34,10 @@ def load_tum(path):
     try:
         traj = file_interface.read_tum_trajectory_file(str(p))
     except Exception as exc:
-        raise InputError(str(exc) or type(exc).__name__, path=p) from None
+        from ..io.sniff import add_format_hint
+
+        raise add_format_hint(InputError(str(exc) or type(exc).__name__, path=p), p, "tum",
+                              use="compare reads TUM trajectories, e.g. OUT/groundtruth.tum") from None
     if not all(np.isfinite(a).all() for a in (traj.timestamps, traj.positions_xyz, traj.orientations_quat_wxyz)):
         read_tum(p, min_poses=1, repeated_stamps="first")  # names the line and the value
         raise InputError("holds a value that is not a finite number", path=p)
@@ -67,7 +70,8 @@ def compare(est, ref, *, metric: str = "ape", pose_relation: str = "trans", alig
         As :func:`splineimu.metrics.compare`.
     """
     _evo()
-    check_compare_options(metric, pose_relation, align, delta, delta_unit, t_max_diff)  # before any file is read
+    # before any file is read
+    check_compare_options(metric, pose_relation, align, delta, delta_unit, t_max_diff, t_offset)
     est, ref = (load_tum(x) if isinstance(x, (str, Path)) else x for x in (est, ref))
     return compare_trajectories(est, ref, metric=metric, pose_relation=pose_relation, align=align, delta=delta,
                                 delta_unit=delta_unit, all_pairs=all_pairs, t_max_diff=t_max_diff, t_offset=t_offset)
