@@ -515,3 +515,14 @@ def test_cli_tilted_positions(tmp_path, capsys):
     assert "random tilts, sigma 2 deg" in out and out.count(" tilt ") == 6
     hits = re.search(r"(\d+) of 12 within 2 predicted std \(nominal method: (\d+) of 12\)", out)
     assert hits and int(hits[1]) >= 10 and int(hits[2]) <= 3, out
+
+
+def test_too_short_a_file_is_named(tmp_path):
+    """A one-row IMU csv was refused as 'Expected `t_ns` to hold at least 3 stamps', without the file."""
+    from splineimu.api.calibration import calibrate_file
+
+    p = tmp_path / "imu.csv"
+    p.write_text("0,0,0,0,0,0,9.81\n")
+    with pytest.raises(InputError) as e:
+        calibrate_file(p, "accelerometer")
+    assert str(e.value) == f"{p}: need at least 3 IMU samples for a calibration, got 1"

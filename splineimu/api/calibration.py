@@ -20,7 +20,7 @@ from ..calibration.estimate import calibrate_accel, calibrate_gyro
 from ..calibration.options import CalibrationOptions
 from ..calibration.report import chi2_summary, estimates_table, phase_table
 from ..calibration.result import SensorCalibration
-from ..errors import ConfigError, OutputExistsError
+from ..errors import ConfigError, InputError, OutputExistsError
 from ..imu.config import load_imu_config
 from ..io.calibration_yaml import check_calibration_target, write_calibration_yaml
 from ..io.dataset import GROUNDTRUTH_CSV, dataset_file, dataset_root
@@ -211,6 +211,8 @@ def calibrate_file(path, sensor: str, options: CalibrationOptions | None = None,
     folder = _data_folder(csv)
     report = _report(folder)
     t_ns, gyro, accel = read_imu_csv(csv)
+    if t_ns.shape[0] < 3:  # the segmentation's own check does not know the file
+        raise InputError(f"need at least 3 IMU samples for a calibration, got {t_ns.shape[0]}", path=csv)
     if sensor == "accelerometer":
         g, g_src = _gravity(gravity_m_s2, report)
         cal = calibrate_accel(t_ns, accel, g, gyro=gyro, options=options)
