@@ -526,3 +526,18 @@ def test_too_few_columns_names_only_the_columns_expected(tmp_path):
     msg = str(e.value)
     assert "expected 8 columns (timestamp p_RS_R_x p_RS_R_y p_RS_R_z q_RS_w q_RS_x q_RS_y q_RS_z), got 4" in msg
     assert "v_RS_R_x" not in msg and msg.startswith(f"{p}:2:")
+
+
+@pytest.mark.parametrize("text", ["", "# only a comment\n", "%YAML:1.0\n---\n"])
+def test_an_empty_imu_yaml_is_not_an_ideal_sensor(tmp_path, text):
+    """An empty (or truncated to its comments) IMU yaml was read as a sensor with no noise:
+    `scene --imu empty.yaml` wrote noise-free data and `calibrate --truth` compared with K = I."""
+    from splineimu.errors import ConfigError
+    from splineimu.imu.presets import load_imu_config
+
+    p = tmp_path / "imu.yaml"
+    p.write_text(text)
+    with pytest.raises(ConfigError) as e:
+        load_imu_config(p)
+    assert str(e.value) == f"{p}: holds no IMU parameters (empty); for a noise-free sensor give the preset `ideal`"
+    assert float(load_imu_config("ideal").gyroscope_noise_density[0]) == 0.0
