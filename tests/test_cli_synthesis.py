@@ -316,3 +316,18 @@ def test_help_and_version_import_no_numpy():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == "False"
+
+
+def test_help_examples_name_existing_presets():
+    """from-euroc's help example used `--imu euroc`, which is no preset (the run stopped with
+    'no IMU preset named `euroc`'); every `--imu NAME` without a file suffix in the commands'
+    help must be a packaged preset."""
+    import re
+
+    from splineimu.cli import _commands
+    from splineimu.imu.presets import list_presets
+
+    names = {m.group(1) for mod in _commands()
+             for m in re.finditer(r"--imu ([A-Za-z0-9_./]+)", getattr(mod, "DESCRIPTION", ""))
+             if "." not in m.group(1) and "/" not in m.group(1)}
+    assert names and names <= set(list_presets()), names - set(list_presets())
