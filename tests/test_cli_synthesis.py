@@ -331,3 +331,12 @@ def test_help_examples_name_existing_presets():
              for m in re.finditer(r"--imu ([A-Za-z0-9_./]+)", getattr(mod, "DESCRIPTION", ""))
              if "." not in m.group(1) and "/" not in m.group(1)}
     assert names and names <= set(list_presets()), names - set(list_presets())
+
+
+def test_a_misspelt_scene_is_named_before_the_missing_output(tmp_path, capsys):
+    """`splineimu scene elipse` (no -o) said 'nothing to write' and hid the misspelt name."""
+    assert main(["scene", "elipse"]) == 1
+    err = capsys.readouterr().err
+    assert "got 'elipse'; did you mean 'ellipse'?" in err and "nothing to write" not in err
+    assert main(["scene", "ellipse"]) == 1
+    assert "nothing to write" in capsys.readouterr().err
