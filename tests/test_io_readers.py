@@ -541,3 +541,21 @@ def test_an_empty_imu_yaml_is_not_an_ideal_sensor(tmp_path, text):
         load_imu_config(p)
     assert str(e.value) == f"{p}: holds no IMU parameters (empty); for a noise-free sensor give the preset `ideal`"
     assert float(load_imu_config("ideal").gyroscope_noise_density[0]) == 0.0
+
+
+def test_a_repeated_yaml_key_is_refused(tmp_path):
+    """PyYAML keeps the last of two equal keys: a scene file with `motion:` twice ran the second
+    motion, and an imu.yaml with a density twice used the second one, without a word."""
+    from splineimu.errors import ConfigError
+    from splineimu.imu.presets import load_imu_config
+    from splineimu.yamldoc import parse_yaml
+
+    p = tmp_path / "imu.yaml"
+    p.write_text("gyroscope_noise_density: 0.1\naccelerometer_noise_density: 0.2\ngyroscope_noise_density: 0.3\n")
+    with pytest.raises(ConfigError) as e:
+        load_imu_config(p)
+    assert str(e.value) == f"{p}:3: key `gyroscope_noise_density` repeats the one on line 1"
+    with pytest.raises(ConfigError, match=r"s.yaml:4: key `scene` repeats the one on line 2"):
+        parse_yaml("motion:\n  scene: static\n  duration_s: 1\n  scene: ellipse\n", "s.yaml")
+    doc = parse_yaml("a: &x {b: 1}\nc:\n  <<: *x\n  d: 2\ne: {b: 1}\nf: {b: 2}\n", "m.yaml")  # merges, equal keys
+    assert doc.data["c"] == {"b": 1, "d": 2} and doc.data["f"] == {"b": 2}  # in different mappings are fine
