@@ -666,3 +666,22 @@ def test_window_stamps_outside_the_span_say_where_they_are():
     with pytest.raises(ConfigError) as e:
         make_windows(t, t, stamps_ns=np.array([0, 10**18, 2 * 10**18]))
     assert str(e.value).endswith("span [0, 10000000000] ns (the 3 given span [0, 2000000000000000000] ns)")
+
+
+def test_windows_across_a_gap_of_the_imu_stamps_are_noted():
+    """A window across 1 s of missing IMU samples had 3 m of error (6e-5 m in the others) and the
+    table alone showed it (dt 2 s, 201 samples); the result now carries a note."""
+    from splineimu.groundtruth import GroundTruth
+    from splineimu.preintegration import evaluate_windows
+
+    t = np.array([i * 5_000_000 for i in range(1000) if not 300 < i < 500], dtype=np.int64)
+    z, g = np.zeros((t.size, 3)), np.tile([0.0, 0.0, 9.81], (t.size, 1))
+    gt_t = np.arange(0, 5_000_000_001, 1_000_000_000)
+    one = np.zeros((gt_t.size, 3))
+    gt = GroundTruth(gt_t, one, np.tile([0.0, 0.0, 0.0, 1.0], (gt_t.size, 1)), one, one, one)
+    windows = np.array([[0, 1_000_000_000], [1_000_000_000, 3_000_000_000], [3_000_000_000, 4_000_000_000]])
+    r = evaluate_windows(t, z, g, gt, windows)
+    assert r.notes == ["1 gap(s) in the IMU stamps longer than 1.5 sample intervals lie inside windows (longest "
+                       "1 s, 1.5 s after the first window's start): a window's deltas across a gap come from the "
+                       "gap's two end samples alone"]
+    assert evaluate_windows(t, z, g, gt, windows[[0, 2]]).notes == []

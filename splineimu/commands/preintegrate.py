@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import sys
+
 NAME = "preintegrate"
 HELP = "preintegrate an output folder's IMU over windows and compare the deltas with ground truth"
 ORDER = 55
@@ -75,6 +77,8 @@ def run(args) -> int:
                              every=args.every, stamps=args.stamps, imu=args.imu, method=args.method,
                              covariance=args.covariance, gravity=args.gravity, sampling=args.sampling)
     df = res.to_dataframe()
+    for note in res.notes:
+        print(f"note: {note}", file=sys.stderr)
     print(f"{len(df)} windows, {args.method} / {args.covariance}; noise: "
           f"{res.noise_source if res.noise is not None else 'none (no NEES)'}")
     print(res.format_table(limit=None if args.all else 40))
