@@ -295,3 +295,18 @@ def test_a_euroc_csv_given_to_compare_is_named(tmp_path):
         compare_files(gt, ref)
     assert str(e.value).endswith("the file looks like a EuRoC ground-truth csv (ns, p xyz, q wxyz, ...): "
                                  "compare reads TUM trajectories, e.g. OUT/groundtruth.tum")
+
+
+def test_plot_is_written_in_the_format_its_name_gives(tmp_path):
+    """--plot out.pdf wrote PNG bytes under the .pdf name; the suffix now picks the format
+    (PNG without one) and an unknown suffix is refused."""
+    ref = tmp_path / "ref.tum"
+    ref.write_text("".join(f"{i}.0 {i} 0 0 0 0 0 1\n" for i in range(5)))
+    heads = {"a.pdf": b"%PDF", "a.png": b"\x89PNG", "a": b"\x89PNG"}
+    for name, magic in heads.items():
+        compare_files(ref, ref, plot=tmp_path / name)
+        assert (tmp_path / name).read_bytes()[:4] == magic, name
+    assert b"<svg" in compare_files(ref, ref, plot=tmp_path / "a.svg").plot_path.read_bytes()[:400]
+    with pytest.raises(ConfigError, match=r"cannot write a plot as '\.txt'"):
+        compare_files(ref, ref, plot=tmp_path / "a.txt")
+    assert not (tmp_path / "a.txt").exists()

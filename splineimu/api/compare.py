@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import ConfigError, InputError
 from ..io.files import staged_path
 from ..io.tum import read_tum
 from ..metrics import CompareResult, _evo, check_compare_options
@@ -145,6 +145,9 @@ def plot_compare(result: CompareResult, path) -> Path:
         ax.set_title(r.title, fontsize="small")
         ax.legend(loc="best", fontsize="small")
     out = Path(path)
+    fmt = out.suffix[1:].lower() or "png"  # the name's format (plot.pdf was PNG bytes), PNG without a suffix
+    if fmt not in fig.canvas.get_supported_filetypes():
+        raise ConfigError(f"cannot write a plot as '.{fmt}' ({out}); give .png, .pdf or .svg", option="--plot")
     with staged_path(out) as tmp:  # a failure or an interrupt leaves what was there
-        fig.savefig(tmp, dpi=110, format="png")
+        fig.savefig(tmp, dpi=110, format=fmt)
     return out
