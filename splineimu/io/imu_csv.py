@@ -439,6 +439,9 @@ def load_recording(path, fmt=None, rate_hz=None, gyro_unit=None, accel_unit=None
     d = np.diff(t_ns)
     med = float(np.median(d))
     rate = 1e9 / med if rate_hz is None else rate_hz
+    if rate_hz is not None and abs(rate_hz * med / 1e9 - 1.0) > 0.01:
+        notes.append(f"the rate given, {rate_hz:g} Hz, is not the stamps' {1e9 / med:.6g} Hz (median interval): "
+                     "the cluster times and noise values follow the rate given")
     gaps = int(np.count_nonzero(d > 1.5 * med))
     if gaps:
         notes.append(f"{gaps} gap(s) longer than 1.5 sample intervals (longest {d.max() / 1e9:.3g} s): "
