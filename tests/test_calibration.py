@@ -526,3 +526,14 @@ def test_too_short_a_file_is_named(tmp_path):
     with pytest.raises(InputError) as e:
         calibrate_file(p, "accelerometer")
     assert str(e.value) == f"{p}: need at least 3 IMU samples for a calibration, got 1"
+
+
+def test_a_bad_table_rate_is_shown_as_the_user_wrote_it(tmp_path):
+    """--table-rate -1 was refused as 'got np.float64(-1.0)' (numpy's repr in a user message)."""
+    from splineimu.api.calibration import calibrate_file
+
+    p = tmp_path / "imu.csv"
+    p.write_text("".join(f"{i * 5_000_000},0,0,0,0,0,9.81\n" for i in range(10)))
+    with pytest.raises(ConfigError) as e:
+        calibrate_file(p, "gyroscope", table_rates_rad_s=[-1.0])
+    assert str(e.value) == "`table_rates_rad_s` must be positive, got -1.0"

@@ -126,7 +126,7 @@ def _gravity(given, report):
 
 def _table_rates(given, report):
     if given:
-        return [positive_float(r, "table_rates_rad_s") for r in np.atleast_1d(given)], "--table-rate"
+        return [positive_float(r, "table_rates_rad_s") for r in np.atleast_1d(given).tolist()], "--table-rate"
     try:
         src = report["source"]
         if src.get("name") == "rate-table":
