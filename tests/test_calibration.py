@@ -537,3 +537,19 @@ def test_a_bad_table_rate_is_shown_as_the_user_wrote_it(tmp_path):
     with pytest.raises(ConfigError) as e:
         calibrate_file(p, "gyroscope", table_rates_rad_s=[-1.0])
     assert str(e.value) == "`table_rates_rad_s` must be positive, got -1.0"
+
+
+def test_a_broken_report_json_is_refused_unless_its_values_are_given(tmp_path):
+    """A report.json that is not JSON was taken for none: g = 9.81 'default' instead of the
+    scene's gravity, in silence. It is refused now, unless --gravity-magnitude is given."""
+    from splineimu.api.calibration import calibrate_file
+
+    out = tmp_path / "six"
+    assert main(["scene", "six-position", "-o", str(out), "--gravity", "0", "0", "-9.80665"]) == 0
+    csv = out / "mav0" / "imu0" / "data.csv"
+    assert calibrate_file(csv, "accelerometer").reference.startswith("g = 9.80665 m/s^2 (report.json)")
+    (out / "report.json").write_text('{"imu": {"gravity_m_s2": [0, 0, -9.80')
+    with pytest.raises(InputError) as e:
+        calibrate_file(csv, "accelerometer")
+    assert str(e.value).startswith(f"{out / 'report.json'}:1: not valid JSON (")
+    assert calibrate_file(csv, "accelerometer", gravity_m_s2=9.8).reference == "g = 9.8 m/s^2 (--gravity-magnitude)"

@@ -108,10 +108,20 @@ def _data_folder(csv_path: Path) -> Path:
 
 
 def _report(folder: Path):
+    """The data folder's report.json (None without one); one that exists but is not JSON is an
+    error, not a silent g = 9.81 and no table rate."""
+    path = folder / "report.json"
+    advice = "it gives g and the table rates: repair it, or give --gravity-magnitude / --table-rate"
     try:
-        return json.loads((folder / "report.json").read_text(encoding="utf-8"))
-    except (OSError, ValueError):
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
         return None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"cannot read ({getattr(exc, 'strerror', None) or exc}); {advice}", path=path) from None
+    try:
+        return json.loads(text)
+    except ValueError as exc:
+        raise InputError(f"not valid JSON ({exc.msg}); {advice}", path=path, line=exc.lineno) from None
 
 
 def _gravity(given, report):
@@ -209,7 +219,8 @@ def calibrate_file(path, sensor: str, options: CalibrationOptions | None = None,
         check_calibration_target(target, [sensor], force)
     csv = Path(path)
     folder = _data_folder(csv)
-    report = _report(folder)
+    given = gravity_m_s2 is not None if sensor == "accelerometer" else bool(table_rates_rad_s)
+    report = None if given else _report(folder)  # read only for what was not given
     t_ns, gyro, accel = read_imu_csv(csv)
     if t_ns.shape[0] < 3:  # the segmentation's own check does not know the file
         raise InputError(f"need at least 3 IMU samples for a calibration, got {t_ns.shape[0]}", path=csv)
