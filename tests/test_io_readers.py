@@ -559,3 +559,28 @@ def test_a_repeated_yaml_key_is_refused(tmp_path):
         parse_yaml("motion:\n  scene: static\n  duration_s: 1\n  scene: ellipse\n", "s.yaml")
     doc = parse_yaml("a: &x {b: 1}\nc:\n  <<: *x\n  d: 2\ne: {b: 1}\nf: {b: 2}\n", "m.yaml")  # merges, equal keys
     assert doc.data["c"] == {"b": 1, "d": 2} and doc.data["f"] == {"b": 2}  # in different mappings are fine
+
+
+def test_imu_csv_stamps_are_exact_or_refused(tmp_path):
+    """EuRoC-size stamps written with '.0' were read through a float by the fast parser
+    (1403715273267142976.0 -> ...142912 ns, 200.003 Hz) and a stamp beyond int64 ended in an
+    OverflowError traceback; '1_000' was read as 1000 (Python's float()). A trailing comma and
+    a header line without '#' are read."""
+    from splineimu.io.imu_csv import read_imu_csv
+
+    def csv(name, rows):
+        p = tmp_path / name
+        p.write_text("".join(r + "\n" for r in rows))
+        return p
+
+    t0 = 1403715273262142976
+    dec = r"dec.csv:1: time stamp must be integer nanoseconds, got '1403715273262142976\.0'"
+    with pytest.raises(InputError, match=dec):
+        read_imu_csv(csv("dec.csv", [f"{t0 + i * 5_000_000}.0,0,0,0,0,0,9.81" for i in range(3)]))
+    with pytest.raises(InputError, match=r"big.csv:3: time stamp 9223372036859775807 ns does not fit a 64-bit"):
+        read_imu_csv(csv("big.csv", [f"{2**63 - 1 - 5_000_000 + i * 5_000_000},0,0,0,0,0,9.81" for i in range(3)]))
+    with pytest.raises(InputError, match=r"us.csv:2: non-numeric value in '5000000,1_000,0,0,0,0,9.81'"):
+        read_imu_csv(csv("us.csv", ["0,0,0,0,0,0,9.81", "5000000,1_000,0,0,0,0,9.81"]))
+    t, g, a = read_imu_csv(csv("ok.csv", ["timestamp,wx,wy,wz,ax,ay,az"]
+                                + [f"{t0 + i * 5_000_000},0,0,0.5,0,0,9.81," for i in range(3)]))
+    assert t.tolist() == [t0, t0 + 5_000_000, t0 + 10_000_000] and g[:, 2].tolist() == [0.5] * 3

@@ -76,6 +76,14 @@ def _check_stamps(t_ns, path, line_of_row):
                          path, line_of_row(i))
 
 
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
 def _parse_slow(path):
     """Line-by-line parser: exact messages with line numbers (used when the fast path fails)."""
     t, v, lines = [], [], []
@@ -85,14 +93,23 @@ def _parse_slow(path):
             if not s or s.startswith("#"):
                 continue
             parts = [p.strip() for p in s.split(",")]
+            if len(parts) == 8 and not parts[-1]:  # a trailing comma
+                parts.pop()
+            if not t and len(parts) == 7 and not any(_is_number(p) for p in parts):
+                continue  # a header without '#' (timestamp,wx,wy,...)
             if len(parts) != 7:
                 raise InputError("expected 7 comma-separated fields (t_ns, gyro xyz, accel xyz), "
                                  f"got {len(parts)}", path, lineno)
+            if "_" in s:  # Python's int() and float() take 1_000 as 1000; a csv number has no underscore
+                raise InputError(f"non-numeric value in {s!r}", path, lineno)
             try:
                 tn = int(parts[0])
             except ValueError:
                 raise InputError(f"time stamp must be integer nanoseconds, got {parts[0]!r}",
                                  path, lineno) from None
+            if not -(2**63) <= tn < 2**63:
+                raise InputError(f"time stamp {parts[0]} ns does not fit a 64-bit integer (after the year 2262)",
+                                 path, lineno)
             try:
                 vals = [float(p) for p in parts[1:]]
             except ValueError:
@@ -215,8 +232,9 @@ def _read_fast(path):
     import pandas as pd
 
     kw = dict(comment="#", header=None, skip_blank_lines=True, engine="c", low_memory=False,
-              dtype={0: np.int64, 1: np.float64, 2: np.float64, 3: np.float64,
-                     4: np.float64, 5: np.float64, 6: np.float64})
+              # column 0 inferred: forced to int64, pandas took "1403715273262142976.0" or "1e9" as a float
+              # and cast it (to ...142912 ns) in silence; inferred, only all-integer text is int64
+              dtype={1: np.float64, 2: np.float64, 3: np.float64, 4: np.float64, 5: np.float64, 6: np.float64})
     if _pandas_rounds_last_ulp():
         kw["float_precision"] = "round_trip"  # pandas < 3.1 parses some decimals 1 ulp off
     size = path.stat().st_size
@@ -239,7 +257,7 @@ def _read_fast(path):
 
             with ThreadPoolExecutor(max_workers=parts) as pool:
                 frames = list(pool.map(part, range(parts)))
-    if any(f.shape[1] != 7 for f in frames if len(f)):
+    if any(f.shape[1] != 7 or f[0].dtype != np.int64 for f in frames if len(f)):
         return None, None
     frames = [f for f in frames if len(f)]
     n = sum(len(f) for f in frames)
