@@ -584,3 +584,22 @@ def test_imu_csv_stamps_are_exact_or_refused(tmp_path):
     t, g, a = read_imu_csv(csv("ok.csv", ["timestamp,wx,wy,wz,ax,ay,az"]
                                 + [f"{t0 + i * 5_000_000},0,0,0.5,0,0,9.81," for i in range(3)]))
     assert t.tolist() == [t0, t0 + 5_000_000, t0 + 10_000_000] and g[:, 2].tolist() == [0.5] * 3
+
+
+def test_absurd_imu_values_are_refused_with_their_line(tmp_path):
+    """A finite 1e300 passed the IMU reader: allan printed inf and numpy warnings, preintegrate
+    "`quat_xyzw` row 0 is not a valid quaternion (norm nan)", integrate "`positions` contains
+    NaN or inf"; no file or line was named."""
+    from splineimu.io.imu_csv import MAX_IMU_VALUE, read_imu_csv
+
+    p = tmp_path / "imu.csv"
+    rows = [f"{i * 5_000_000},0,0,0,0,0,9.81" for i in range(6)]
+    rows[3] = "15000000,0,0,0,0,-1e300,9.81"
+    p.write_text("#t,gx,gy,gz,ax,ay,az\n" + "\n".join(rows) + "\n")
+    with pytest.raises(InputError) as e:
+        read_imu_csv(p)
+    assert str(e.value) == (f"{p}:5: value -1e+300 (column 6) is beyond 1e+12 in magnitude: no IMU reads that "
+                            "(a unit or column mix-up?)")
+    rows[3] = f"15000000,0,0,{MAX_IMU_VALUE},0,0,9.81"  # the bound itself is read
+    p.write_text("\n".join(rows) + "\n")
+    assert read_imu_csv(p)[1][3, 2] == MAX_IMU_VALUE

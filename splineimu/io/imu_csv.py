@@ -42,6 +42,10 @@ from ..validation import as_rate_hz
 __all__ = ["read_imu_csv", "read_imu_table", "read_static_rda", "load_recording", "ImuRecording",
            "GYRO_UNITS", "ACCEL_UNITS", "STANDARD_GRAVITY", "RECORDING_FORMATS"]
 
+#: Largest |gyro| or |accel| value an IMU csv may hold (far beyond any sensor in any unit); 1e300 passed
+#: the reader and overflowed the analyses into inf, NaN quaternions and numpy warnings.
+MAX_IMU_VALUE = 1e12
+
 #: Standard gravity [m/s^2] used to convert "g" (ISO 80000-3).
 STANDARD_GRAVITY = 9.80665
 
@@ -193,6 +197,11 @@ def _read_imu_table(path):
         return _line_of_data_row(path, i)
 
     _check_stamps(t_ns, path, line_of_row)
+    big = np.abs(vals) > MAX_IMU_VALUE
+    if big.any():
+        i, j = (int(x[0]) for x in np.nonzero(big))
+        raise InputError(f"value {vals[i, j]:g} (column {j + 2}) is beyond {MAX_IMU_VALUE:g} in magnitude: no IMU "
+                         "reads that (a unit or column mix-up?)", path, line_of_row(i))
     check_ns_spacing(t_ns, path=path, advice="an EuRoC IMU csv has integer nanoseconds: convert the column")
     return t_ns, vals
 
