@@ -603,3 +603,18 @@ def test_absurd_imu_values_are_refused_with_their_line(tmp_path):
     rows[3] = f"15000000,0,0,{MAX_IMU_VALUE},0,0,9.81"  # the bound itself is read
     p.write_text("\n".join(rows) + "\n")
     assert read_imu_csv(p)[1][3, 2] == MAX_IMU_VALUE
+
+
+def test_a_quaternion_with_huge_components_is_normalized_not_zero(tmp_path):
+    """qw = 1e300 (finite) squared to inf: the norm was inf, the quaternion became 0 and the
+    run stopped with "`quat_xyzw` row 0 is not a valid quaternion (norm 0)" (no file, no line)
+    after a numpy overflow warning."""
+    import warnings
+
+    p = tmp_path / "poses.tum"
+    p.write_text("".join(f"{i}.0 0 0 0 0 0 1e300 1e300\n" for i in range(3)))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        tr = read_tum(p)
+    np.testing.assert_allclose(tr.quat_xyzw, np.tile([0.0, 0.0, 2**-0.5, 2**-0.5], (3, 1)), rtol=0, atol=1e-15)
+    assert any("worst: 1.41421e+300 on line 1" in n for n in tr.notices)
