@@ -232,7 +232,7 @@ def test_errors(files, tmp_path, capsys, monkeypatch):
         compare(str(tmp_path / "missing.tum"), files["ref"])
     bad = tmp_path / "bad.tum"
     bad.write_text("1.0 2 3\n")
-    with pytest.raises(InputError, match="8 entries per row"):
+    with pytest.raises(InputError, match=r"bad.tum:1: expected 8 columns \(timestamp tx ty tz qx qy qz qw\), got 3"):
         compare(str(bad), files["ref"])
     assert cli.main(["compare", str(bad), files["ref"]]) == 1
     err = capsys.readouterr().err
@@ -326,3 +326,20 @@ def test_few_associated_poses_are_noted(tmp_path, capsys):
     assert cli.main(["compare", str(est), str(ref)]) == 0
     assert capsys.readouterr().err.startswith("note: only 1 of 399 estimated")
     assert compare_files(ref, ref).notes == []
+
+
+def test_zero_quaternion_and_empty_tum_are_named(tmp_path):
+    """evo reads a [0, 0, 0, 0] quaternion (it gave 5.8 deg of rotation APE, silently) and
+    answers a header-only file with 'TUM trajectory files must have 8 entries per row'."""
+    ref = tmp_path / "ref.tum"
+    ref.write_text("".join(f"{i}.0 {i} 0 0 0 0 0 1\n" for i in range(5)))
+    zq = tmp_path / "zq.tum"
+    zq.write_text("".join(f"{i}.0 {i} 0 0 0 0 0 {0 if i == 2 else 1}\n" for i in range(5)))
+    with pytest.raises(InputError) as e:
+        compare_files(zq, ref, pose_relation="angle_deg")
+    assert str(e.value) == f"{zq}:3: quaternion has zero norm: [0, 0, 0, 0]"
+    empty = tmp_path / "empty.tum"
+    empty.write_text("# timestamp tx ty tz qx qy qz qw\n")
+    with pytest.raises(InputError) as e:
+        compare_files(empty, ref)
+    assert str(e.value) == f"{empty}: no data rows (only comments, blank lines or a header)"

@@ -12,6 +12,7 @@ import numpy as np
 
 from ..errors import ConfigError, InputError
 from ..io.files import staged_path
+from ..io.poses import ZERO_NORM_TOL
 from ..io.tum import read_tum
 from ..metrics import CompareResult, _evo, check_compare_options
 from ..metrics import compare as compare_trajectories
@@ -36,12 +37,26 @@ def load_tum(path):
     except Exception as exc:
         from ..io.sniff import add_format_hint
 
-        raise add_format_hint(InputError(str(exc) or type(exc).__name__, path=p), p, "tum",
-                              use="compare reads TUM trajectories, e.g. OUT/groundtruth.tum") from None
-    if not all(np.isfinite(a).all() for a in (traj.timestamps, traj.positions_xyz, traj.orientations_quat_wxyz)):
+        if _tum_problem(p) is None:  # our reader names an empty file or a bad line; evo's words otherwise
+            raise add_format_hint(InputError(str(exc) or type(exc).__name__, path=p), p, "tum",
+                                  use="compare reads TUM trajectories, e.g. OUT/groundtruth.tum") from None
+    q = np.asarray(traj.orientations_quat_wxyz)
+    if not all(np.isfinite(a).all() for a in (traj.timestamps, traj.positions_xyz, q)) or \
+            not (np.linalg.norm(q, axis=1) >= ZERO_NORM_TOL).all():  # evo takes [0, 0, 0, 0] (5.8 deg of APE)
         read_tum(p, min_poses=1, repeated_stamps="first")  # names the line and the value
-        raise InputError("holds a value that is not a finite number", path=p)
+        raise InputError("holds a value that is not a finite number or a zero quaternion", path=p)
     return traj
+
+
+def _tum_problem(path):
+    """None, or raises :func:`read_tum`'s InputError (the file and line) for an empty or malformed file
+    whose problem :func:`read_tum` names (it reads a few layouts evo does not: those return None)."""
+    from ..io.sniff import guess_format
+
+    if guess_format(path) not in (None, "tum"):
+        return None  # another format: evo's words with the format hint
+    read_tum(path, min_poses=1, repeated_stamps="first")
+    return None
 
 
 def compare(est, ref, *, metric: str = "ape", pose_relation: str = "trans", align: str = "none",
