@@ -37,9 +37,9 @@ def load_tum(path):
     except Exception as exc:
         from ..io.sniff import add_format_hint
 
-        if _tum_problem(p) is None:  # our reader names an empty file or a bad line; evo's words otherwise
-            raise add_format_hint(InputError(str(exc) or type(exc).__name__, path=p), p, "tum",
-                                  use="compare reads TUM trajectories, e.g. OUT/groundtruth.tum") from None
+        _raise_tum_problem(p)  # our reader names an empty file or a bad line; evo's words otherwise
+        raise add_format_hint(InputError(str(exc) or type(exc).__name__, path=p), p, "tum",
+                              use="compare reads TUM trajectories, e.g. OUT/groundtruth.tum") from None
     q = np.asarray(traj.orientations_quat_wxyz)
     if not all(np.isfinite(a).all() for a in (traj.timestamps, traj.positions_xyz, q)) or \
             not (np.linalg.norm(q, axis=1) >= ZERO_NORM_TOL).all():  # evo takes [0, 0, 0, 0] (5.8 deg of APE)
@@ -48,15 +48,13 @@ def load_tum(path):
     return traj
 
 
-def _tum_problem(path):
-    """None, or raises :func:`read_tum`'s InputError (the file and line) for an empty or malformed file
-    whose problem :func:`read_tum` names (it reads a few layouts evo does not: those return None)."""
+def _raise_tum_problem(path) -> None:
+    """Raise :func:`read_tum`'s InputError (the file, line and columns) for a TUM file evo cannot
+    read; returns when :func:`read_tum` reads it (tabs, extra columns) or it is another format."""
     from ..io.sniff import guess_format
 
-    if guess_format(path) not in (None, "tum"):
-        return None  # another format: evo's words with the format hint
-    read_tum(path, min_poses=1, repeated_stamps="first")
-    return None
+    if guess_format(path) in (None, "tum"):
+        read_tum(path, min_poses=1, repeated_stamps="first")
 
 
 def compare(est, ref, *, metric: str = "ape", pose_relation: str = "trans", align: str = "none",
