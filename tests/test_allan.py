@@ -413,3 +413,18 @@ def test_a_rate_unlike_the_stamps_is_noted(tmp_path):
     assert notes == ["the rate given, 100 Hz, is not the stamps' 200 Hz (median interval): the cluster times "
                      "and noise values follow the rate given"]
     assert load_recording(p, rate_hz=200.5).notes == [] and load_recording(p).notes == []
+
+
+def test_plot_of_a_noise_free_recording_is_drawn_without_warnings(tmp_path):
+    """A noise-free recording (splineimu scene static without --imu) has Allan deviations of 0:
+    `allan -o DIR --plot` printed four matplotlib warnings (no positive values, non-positive ylim)."""
+    import warnings
+
+    p = tmp_path / "imu.csv"
+    p.write_text("".join(f"{i * 5_000_000},0,0,0,0,0,9.81\n" for i in range(2000)))
+    analysis = analyze_recording(p, None, None, None, None)
+    assert np.all(analysis.fit.white_noise_density[:3] == 0.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        written = write_allan_outputs(analysis, tmp_path / "out", plot=True, force=False)
+    assert (tmp_path / "out" / "allan.png").read_bytes()[:4] == b"\x89PNG" and len(written) == 2
