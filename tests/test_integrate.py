@@ -413,3 +413,18 @@ def test_a_broken_report_json_is_not_taken_for_point_samples(tmp_path):
     assert dead_reckon(imu, init=gt, sampling="mean").sampling == "mean"
     (tmp_path / "report.json").write_text('{"imu": {"sampling": "mean"}}')
     assert dead_reckon(imu, init=gt).sampling == "mean"
+
+
+def test_a_tum_file_as_initial_state_gets_the_right_advice(tmp_path):
+    """groundtruth.tum (which scene and from-tum write) given to --init was answered with 'use
+    `splineimu from-tum`', the advice for synthesis; integrate needs the 17-column ground truth."""
+    imu = tmp_path / "imu.csv"
+    imu.write_text("".join(f"{i * 5_000_000},0,0,0,0,0,9.81\n" for i in range(10)))
+    tum = tmp_path / "groundtruth.tum"
+    tum.write_text("# timestamp tx ty tz qx qy qz qw\n" + "".join(f"{i * 0.005:.9f} 0 0 0 0 0 0 1\n" for i in range(5)))
+    with pytest.raises(InputError) as e:
+        dead_reckon(imu, init=tum)
+    msg = str(e.value)
+    assert msg.endswith("the file looks like a TUM trajectory (t x y z qx qy qz qw, seconds): this needs the "
+                        "17-column EuRoC ground truth, e.g. OUT/mav0/state_groundtruth_estimate0/data.csv")
+    assert "from-tum" not in msg
