@@ -685,3 +685,19 @@ def test_windows_across_a_gap_of_the_imu_stamps_are_noted():
                        "1 s, 1.5 s after the first window's start): a window's deltas across a gap come from the "
                        "gap's two end samples alone"]
     assert evaluate_windows(t, z, g, gt, windows[[0, 2]]).notes == []
+
+
+def test_non_finite_gravity_is_refused():
+    """--gravity 0 0 nan gave NaN errors in every window and exit code 0 (integrate refuses it)."""
+    from splineimu.groundtruth import GroundTruth
+    from splineimu.preintegration import evaluate_windows
+
+    t = np.arange(0, 2_000_000_001, 5_000_000, dtype=np.int64)
+    z, g = np.zeros((t.size, 3)), np.tile([0.0, 0.0, 9.81], (t.size, 1))
+    gt_t = np.array([0, 2_000_000_000])
+    one = np.zeros((2, 3))
+    gt = GroundTruth(gt_t, one, np.tile([0.0, 0.0, 0.0, 1.0], (2, 1)), one, one, one)
+    with pytest.raises(InputError, match="`gravity` contains NaN or inf"):
+        evaluate_windows(t, z, g, gt, np.array([[0, 1_000_000_000]]), gravity=[0.0, 0.0, np.nan])
+    r = evaluate_windows(t, z, g, gt, np.array([[0, 1_000_000_000]]))
+    assert r.error_p_m[0] < 1e-12

@@ -17,7 +17,7 @@ from ..errors import ConfigError, InputError, SplineImuError
 from ..groundtruth import GroundTruth
 from ..integrate import SAMPLINGS, points_from_means
 from ..motion import DEFAULT_GRAVITY
-from ..validation import as_stamps_ns, as_vectors, one_of
+from ..validation import as_stamps_ns, as_vector, as_vectors, one_of
 from .deltas import Deltas, delta_error, deltas_from_states, nees
 from .preintegrator import Preintegrator
 
@@ -226,6 +226,7 @@ def evaluate_windows(imu_t_ns, gyro, accel, groundtruth: GroundTruth, windows_ns
     imu_t_ns = as_stamps_ns(imu_t_ns, "imu_t_ns")
     gyro = as_vectors(gyro, "gyro", imu_t_ns.shape[0])
     accel = as_vectors(accel, "accel", imu_t_ns.shape[0])
+    gravity = as_vector(gravity, "gravity")  # NaN gave NaN errors for every window, exit code 0
     if one_of(sampling, "sampling", SAMPLINGS) == "mean":
         both = points_from_means((imu_t_ns - imu_t_ns[0]).astype(np.float64) * 1e-9, np.hstack([gyro, accel]))
         gyro, accel = both[:, :3], both[:, 3:]
