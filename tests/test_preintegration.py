@@ -701,3 +701,11 @@ def test_non_finite_gravity_is_refused():
         evaluate_windows(t, z, g, gt, np.array([[0, 1_000_000_000]]), gravity=[0.0, 0.0, np.nan])
     r = evaluate_windows(t, z, g, gt, np.array([[0, 1_000_000_000]]))
     assert r.error_p_m[0] < 1e-12
+
+
+def test_a_file_given_as_the_folder_is_named(tmp_path):
+    """`preintegrate imu.csv` said 'IMU csv not found: imu.csv/mav0/imu0/data.csv'."""
+    p = tmp_path / "imu.csv"
+    p.write_text("0,0,0,0,0,0,9.81\n")
+    with pytest.raises(ConfigError, match=r"imu.csv is a file, not an output folder: give the folder"):
+        evaluate_recording(p)
