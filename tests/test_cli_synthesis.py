@@ -340,3 +340,17 @@ def test_a_misspelt_scene_is_named_before_the_missing_output(tmp_path, capsys):
     assert "got 'elipse'; did you mean 'ellipse'?" in err and "nothing to write" not in err
     assert main(["scene", "ellipse"]) == 1
     assert "nothing to write" in capsys.readouterr().err
+
+
+def test_order_2_is_refused_for_synthesis(capsys):
+    """--order 2 (accepted, though the help said 4 .. 6) fitted a piecewise-linear position spline:
+    the ellipse's accelerometer read gravity alone (a_x 1e-8 for -1.48 m/s^2) and the predicted
+    accel error was 7e-6 m/s^2."""
+    from splineimu.api.options import SplineOptions
+    from splineimu.errors import ConfigError
+
+    with pytest.raises(ConfigError, match="2 \\(piecewise linear\\) has no acceleration"):
+        SplineOptions(order=2)
+    assert SplineOptions(order=3).order == 3 and SplineOptions(order=8).order == 8
+    assert main(["from-tum", "poses.tum", "--order", "2", "-o", "never"]) == 1
+    assert "`--order` 2 (piecewise linear) has no acceleration" in capsys.readouterr().err

@@ -96,7 +96,7 @@ def add_pose_args(p: argparse.ArgumentParser, fmt_help: str):
     g.add_argument("--spline", choices=["split", "se3"],
                    help="split: R3 x SO3 (default, decoupled); se3: Lovegrove et al.'s cumulative SE3")
     g.add_argument("--order", metavar="K",
-                   help="spline order 4 (cubic) .. 6, or auto (default: the best predicted of 4, 5, 6)")
+                   help="spline order 3 .. 8 (4 is cubic), or auto (default: the best predicted of 4, 5, 6)")
     g.add_argument("--knot-spacing", metavar="S",
                    help="knot spacing in seconds, or auto (default: minimizes the predicted IMU error)")
     g.add_argument("--smoothness", type=float, metavar="MU",
