@@ -354,3 +354,22 @@ def test_order_2_is_refused_for_synthesis(capsys):
     assert SplineOptions(order=3).order == 3 and SplineOptions(order=8).order == 8
     assert main(["from-tum", "poses.tum", "--order", "2", "-o", "never"]) == 1
     assert "`--order` 2 (piecewise linear) has no acceleration" in capsys.readouterr().err
+
+
+def test_rate_and_timestamps_together_are_refused(tmp_path, capsys):
+    """--rate 50 with --timestamps was ignored in silence (the samples follow the file), on the
+    command line and in a scene file alike."""
+    from splineimu.api.scenefile import load_scene_file
+    from splineimu.errors import ConfigError
+
+    stamps = tmp_path / "stamps.txt"
+    stamps.write_text("".join(f"{i * 5_000_000}\n" for i in range(20)))
+    assert main(["scene", "static", "--timestamps", str(stamps), "--rate", "50", "-o", str(tmp_path / "o")]) == 1
+    assert "--rate and --timestamps are both given" in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()
+    f = tmp_path / "s.yaml"
+    f.write_text(f"motion: {{scene: static, duration_s: 1}}\nimu: {{rate_hz: 50, timestamps: {stamps}}}\n"
+                 "output: {dir: o}\n")
+    with pytest.raises(ConfigError, match=r"s.yaml:2: `imu.rate_hz` and `imu.timestamps` are both given"):
+        load_scene_file(f)
+    assert main(["scene", "static", "--timestamps", str(stamps), "-o", str(tmp_path / "o")]) == 0

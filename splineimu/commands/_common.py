@@ -140,8 +140,12 @@ def options_from_args(args, motion: str):
     from pathlib import Path
 
     from ..api.options import FlagOrigin, ImuOptions, OutputOptions, PosesInput, SceneInput, SplineOptions, SynthesisJob
+    from ..errors import ConfigError
 
     o = FlagOrigin()
+    if args.timestamps is not None and args.rate is not None:  # the rate was ignored in silence
+        raise ConfigError("--rate and --timestamps are both given: the samples are at the file's stamps; drop --rate",
+                          option="--rate")
     if motion == "scene":
         source = SceneInput(args.name, **_given(args, duration_s="duration", t0_ns="t0_ns"),
                             params=_params(args.param), origin=o)
