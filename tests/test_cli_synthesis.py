@@ -373,3 +373,17 @@ def test_rate_and_timestamps_together_are_refused(tmp_path, capsys):
     with pytest.raises(ConfigError, match=r"s.yaml:2: `imu.rate_hz` and `imu.timestamps` are both given"):
         load_scene_file(f)
     assert main(["scene", "static", "--timestamps", str(stamps), "-o", str(tmp_path / "o")]) == 0
+
+
+def test_tum_file_inside_the_output_folder_is_refused(tmp_path, capsys):
+    """`scene -o OUT --tum OUT/poses.tum` wrote the TUM file first: without --force the folder
+    was then refused for being non-empty (leaving OUT/poses.tum behind), with --force the
+    folder replaced it and the TUM file was gone, in silence."""
+    out = tmp_path / "out"
+    for extra in ([], ["--force"]):
+        assert main(["scene", "static", "--duration", "1", "-o", str(out), "--tum", str(out / "poses.tum"),
+                     *extra]) == 1
+        assert "lies in the output folder" in capsys.readouterr().err
+        assert not out.exists()
+    assert main(["scene", "static", "--duration", "1", "-o", str(out), "--tum", str(tmp_path / "poses.tum")]) == 0
+    assert (tmp_path / "poses.tum").is_file() and (out / "groundtruth.tum").is_file()
