@@ -343,3 +343,10 @@ def test_zero_quaternion_and_empty_tum_are_named(tmp_path):
     with pytest.raises(InputError) as e:
         compare_files(empty, ref)
     assert str(e.value) == f"{empty}: no data rows (only comments, blank lines or a header)"
+
+
+def test_a_folder_given_as_a_trajectory_is_named_a_folder(tmp_path):
+    """A folder given to compare was reported as 'no such file'."""
+    with pytest.raises(InputError) as e:
+        compare_files(tmp_path, tmp_path)
+    assert str(e.value) == f"{tmp_path}: is a folder, expected a TUM file"

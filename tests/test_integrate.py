@@ -428,3 +428,12 @@ def test_a_tum_file_as_initial_state_gets_the_right_advice(tmp_path):
     assert msg.endswith("the file looks like a TUM trajectory (t x y z qx qy qz qw, seconds): this needs the "
                         "17-column EuRoC ground truth, e.g. OUT/mav0/state_groundtruth_estimate0/data.csv")
     assert "from-tum" not in msg
+
+
+def test_a_folder_given_as_initial_state_is_named_a_folder(tmp_path):
+    """--init FOLDER was reported as 'initial-state file not found'."""
+    imu = tmp_path / "imu.csv"
+    imu.write_text("".join(f"{i * 5_000_000},0,0,0,0,0,9.81\n" for i in range(10)))
+    with pytest.raises(ConfigError) as e:
+        dead_reckon(imu, init=tmp_path)
+    assert str(e.value) == f"initial-state file is a folder, expected the ground-truth csv: {tmp_path}"

@@ -31,7 +31,7 @@ def load_tum(path):
     _, _, _, file_interface = _evo()
     p = Path(path)
     if not p.is_file():
-        raise InputError("no such file", path=p)
+        raise InputError("is a folder, expected a TUM file" if p.is_dir() else "no such file", path=p)
     try:
         traj = file_interface.read_tum_trajectory_file(str(p))
     except Exception as exc:

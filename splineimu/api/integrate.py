@@ -137,7 +137,8 @@ def dead_reckon(imu_path, init=None, method: str = "rk4", gravity=DEFAULT_GRAVIT
     gt_path = Path(init) if init is not None else default_groundtruth_path(imu_path)
     if not gt_path.is_file():
         hint = "" if init is not None else " (the default beside the IMU file); pass --init GROUND_TRUTH"
-        raise ConfigError(f"initial-state file not found: {gt_path}{hint}")
+        what = "is a folder, expected the ground-truth csv" if gt_path.is_dir() else "not found"
+        raise ConfigError(f"initial-state file {what}: {gt_path}{hint}")
     one_of(method, "method", METHODS)
     t_ns, gyro, accel = read_imu_csv(imu_path)
     gt = read_groundtruth(gt_path)
