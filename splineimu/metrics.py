@@ -37,7 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import ConfigError, InputError, SplineImuError
-from .validation import as_quat_xyzw, as_times_s, as_vectors, nonnegative_float, one_of, positive_float
+from .validation import as_quat_xyzw, as_times_s, as_vectors, finite_float, nonnegative_float, one_of, positive_float
 
 __all__ = ["MetricResult", "CompareResult", "compare", "check_compare_options", "EVO_MISSING", "POSE_RELATIONS",
            "ALIGN_MODES", "DELTA_UNITS"]
@@ -137,6 +137,8 @@ class CompareResult:
         Associated estimate positions after alignment [m].
     plot_path : pathlib.Path or None
         The plot :func:`splineimu.api.compare.compare_files` saved, if any.
+    notes : list of str
+        What the numbers rest on that they do not show (few associated poses).
     """
 
     ape: MetricResult | None
@@ -148,6 +150,7 @@ class CompareResult:
     ref_positions: np.ndarray = field(repr=False)
     est_positions_aligned: np.ndarray = field(repr=False)
     plot_path: Path | None = None
+    notes: list = field(default_factory=list)
 
     @property
     def results(self) -> list:
@@ -220,7 +223,8 @@ def _frames_from_seconds(timestamps, delta_s) -> int:
 
 
 def check_compare_options(metric: str = "ape", pose_relation: str = "trans", align: str = "none",
-                          delta: float = 1.0, delta_unit: str = "f", t_max_diff: float = 0.01) -> tuple:
+                          delta: float = 1.0, delta_unit: str = "f", t_max_diff: float = 0.01,
+                          t_offset: float = 0.0) -> tuple:
     """The checks of :func:`compare`'s options; returns ``(delta, t_max_diff)`` as floats.
 
     Raises
@@ -235,6 +239,7 @@ def check_compare_options(metric: str = "ape", pose_relation: str = "trans", ali
     delta = positive_float(delta, "delta")
     if delta_unit == "f" and float(delta) != int(delta):
         raise ConfigError(f"RPE delta in frames must be a whole number, got {delta}", option="delta")
+    finite_float(t_offset, "t_offset")  # NaN associated nothing and was reported as "no matching timestamps"
     return delta, nonnegative_float(t_max_diff, "t_max_diff")
 
 
@@ -293,11 +298,13 @@ def compare(est, ref, *, metric: str = "ape", pose_relation: str = "trans", alig
     0.1
     """
     metrics, sync, _, _ = _evo()
-    delta, t_max_diff = check_compare_options(metric, pose_relation, align, delta, delta_unit, t_max_diff)
+    delta, t_max_diff = check_compare_options(metric, pose_relation, align, delta, delta_unit, t_max_diff,
+                                              t_offset)
     relation = getattr(metrics.PoseRelation, POSE_RELATIONS[pose_relation])
 
     traj_est = _as_evo(est, "est")
     traj_ref = _as_evo(ref, "ref")
+    spans = [(t.num_poses, float(t.timestamps[0]), float(t.timestamps[-1])) for t in (traj_est, traj_ref)]
     try:
         traj_ref, traj_est = sync.associate_trajectories(
             traj_ref, traj_est, max_diff=float(t_max_diff), offset_2=float(t_offset))
@@ -345,4 +352,16 @@ def compare(est, ref, *, metric: str = "ape", pose_relation: str = "trans", alig
         alignment_sim3=alignment, timestamps_s=np.asarray(traj_est.timestamps, dtype=np.float64).copy(),
         ref_positions=np.array(traj_ref.positions_xyz, dtype=np.float64),
         est_positions_aligned=np.array(traj_est.positions_xyz, dtype=np.float64),
+        notes=_association_notes(int(traj_est.num_poses), spans, t_offset),
     )
+
+
+def _association_notes(n: int, spans, t_offset: float) -> list:
+    """A note when fewer than half the poses of the shorter trajectory were associated (stamps in
+    ns against s gave 1 of 399 poses and an APE of exactly 0, in silence)."""
+    (n_est, e0, e1), (n_ref, r0, r1) = spans
+    if n >= 0.5 * min(n_est, n_ref):
+        return []
+    return [f"only {n} of {n_est} estimated and {n_ref} reference poses were associated: the stamps span "
+            f"[{e0 + t_offset:.9g}, {e1 + t_offset:.9g}] s (estimate{' + --t-offset' if t_offset else ''}) and "
+            f"[{r0:.9g}, {r1:.9g}] s (reference); check their units and --t-max-diff"]

@@ -141,6 +141,10 @@ class _Refused(Exception):
         self.line = line
 
 
+class _Repeated(_Refused):
+    pass
+
+
 def _record_lines(node, prefix, lines, seen):
     import yaml
 
@@ -148,8 +152,13 @@ def _record_lines(node, prefix, lines, seen):
         return
     seen.add(id(node))
     if isinstance(node, yaml.MappingNode):
+        first_line = {}
         for k, v in node.value:
             key = k.value if isinstance(k, yaml.ScalarNode) else None
+            if key is not None and key != "<<":  # PyYAML keeps the last of repeated keys, silently
+                if key in first_line:
+                    raise _Repeated(f"key `{key}` repeats the one on line {first_line[key]}", k.start_mark.line + 1)
+                first_line[key] = k.start_mark.line + 1
             path = prefix + (key,)
             lines.setdefault(path, k.start_mark.line + 1)
             _record_lines(v, path, lines, seen)
@@ -182,6 +191,8 @@ def parse_yaml(text: str, name: str = "<yaml>") -> YamlDoc:
                 raise _Refused(f"more than {MAX_EXPANDED} values once its aliases are expanded", 1)
             _record_lines(node, (), lines, set())
             data = loader.construct_document(node)
+    except _Repeated as exc:
+        raise ConfigError(exc.problem, path=name, line=exc.line) from None
     except _Refused as exc:
         raise ConfigError(f"refused: {exc.problem} (a YAML file of this product is a small mapping)",
                           path=name, line=exc.line) from None

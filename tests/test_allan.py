@@ -389,3 +389,42 @@ def test_small_nnls_and_chi2_quantiles_match_scipy():
     nu = np.array([0.3, 1.0, 2.5, 17.0, 1e3, 1e6])
     for q in (0.025, 0.975):
         np.testing.assert_allclose(_chi2_ppf(q, nu), chi2.ppf(q, nu), rtol=1e-10)  # scipy 1.13-1.14 differ by 1.2e-11
+
+
+def test_dense_cluster_grid_is_every_integer_without_the_memory():
+    """--points-per-decade 1e9 asked np.logspace for 3e9 points (the process was killed for
+    memory); past ~2 m_max ln(m_max) points the grid is every integer 1..m_max anyway."""
+    from splineimu.allan.deviation import default_cluster_factors
+
+    m = default_cluster_factors(1_000_001, 1e9)
+    np.testing.assert_array_equal(m, np.arange(1, 250_001))
+    np.testing.assert_array_equal(default_cluster_factors(2001, 1e300), np.arange(1, 501))
+    np.testing.assert_array_equal(default_cluster_factors(2001, 5000), np.arange(1, 501))  # dense enough already
+    assert default_cluster_factors(1000, 5)[:6].tolist() == [1, 2, 3, 4, 6, 10]
+
+
+def test_a_rate_unlike_the_stamps_is_noted(tmp_path):
+    """--rate 100 on a 200 Hz csv gave white-noise densities 41% off and a doubled duration
+    without a word; a rate more than 1% from the stamps' is now noted."""
+    p = tmp_path / "imu.csv"
+    x = np.random.default_rng(1).standard_normal((400, 6))
+    p.write_text("".join(f"{i * 5_000_000}," + ",".join(f"{v:.6f}" for v in row) + "\n" for i, row in enumerate(x)))
+    notes = load_recording(p, rate_hz=100.0).notes
+    assert notes == ["the rate given, 100 Hz, is not the stamps' 200 Hz (median interval): the cluster times "
+                     "and noise values follow the rate given"]
+    assert load_recording(p, rate_hz=200.5).notes == [] and load_recording(p).notes == []
+
+
+def test_plot_of_a_noise_free_recording_is_drawn_without_warnings(tmp_path):
+    """A noise-free recording (splineimu scene static without --imu) has Allan deviations of 0:
+    `allan -o DIR --plot` printed four matplotlib warnings (no positive values, non-positive ylim)."""
+    import warnings
+
+    p = tmp_path / "imu.csv"
+    p.write_text("".join(f"{i * 5_000_000},0,0,0,0,0,9.81\n" for i in range(2000)))
+    analysis = analyze_recording(p, None, None, None, None)
+    assert np.all(analysis.fit.white_noise_density[:3] == 0.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        written = write_allan_outputs(analysis, tmp_path / "out", plot=True, force=False)
+    assert (tmp_path / "out" / "allan.png").read_bytes()[:4] == b"\x89PNG" and len(written) == 2

@@ -515,3 +515,41 @@ def test_cli_tilted_positions(tmp_path, capsys):
     assert "random tilts, sigma 2 deg" in out and out.count(" tilt ") == 6
     hits = re.search(r"(\d+) of 12 within 2 predicted std \(nominal method: (\d+) of 12\)", out)
     assert hits and int(hits[1]) >= 10 and int(hits[2]) <= 3, out
+
+
+def test_too_short_a_file_is_named(tmp_path):
+    """A one-row IMU csv was refused as 'Expected `t_ns` to hold at least 3 stamps', without the file."""
+    from splineimu.api.calibration import calibrate_file
+
+    p = tmp_path / "imu.csv"
+    p.write_text("0,0,0,0,0,0,9.81\n")
+    with pytest.raises(InputError) as e:
+        calibrate_file(p, "accelerometer")
+    assert str(e.value) == f"{p}: need at least 3 IMU samples for a calibration, got 1"
+
+
+def test_a_bad_table_rate_is_shown_as_the_user_wrote_it(tmp_path):
+    """--table-rate -1 was refused as 'got np.float64(-1.0)' (numpy's repr in a user message)."""
+    from splineimu.api.calibration import calibrate_file
+
+    p = tmp_path / "imu.csv"
+    p.write_text("".join(f"{i * 5_000_000},0,0,0,0,0,9.81\n" for i in range(10)))
+    with pytest.raises(ConfigError) as e:
+        calibrate_file(p, "gyroscope", table_rates_rad_s=[-1.0])
+    assert str(e.value) == "`table_rates_rad_s` must be positive, got -1.0"
+
+
+def test_a_broken_report_json_is_refused_unless_its_values_are_given(tmp_path):
+    """A report.json that is not JSON was taken for none: g = 9.81 'default' instead of the
+    scene's gravity, in silence. It is refused now, unless --gravity-magnitude is given."""
+    from splineimu.api.calibration import calibrate_file
+
+    out = tmp_path / "six"
+    assert main(["scene", "six-position", "-o", str(out), "--gravity", "0", "0", "-9.80665"]) == 0
+    csv = out / "mav0" / "imu0" / "data.csv"
+    assert calibrate_file(csv, "accelerometer").reference.startswith("g = 9.80665 m/s^2 (report.json)")
+    (out / "report.json").write_text('{"imu": {"gravity_m_s2": [0, 0, -9.80')
+    with pytest.raises(InputError) as e:
+        calibrate_file(csv, "accelerometer")
+    assert str(e.value).startswith(f"{out / 'report.json'}:1: not valid JSON (")
+    assert calibrate_file(csv, "accelerometer", gravity_m_s2=9.8).reference == "g = 9.8 m/s^2 (--gravity-magnitude)"

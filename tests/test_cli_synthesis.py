@@ -316,3 +316,74 @@ def test_help_and_version_import_no_numpy():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == "False"
+
+
+def test_help_examples_name_existing_presets():
+    """from-euroc's help example used `--imu euroc`, which is no preset (the run stopped with
+    'no IMU preset named `euroc`'); every `--imu NAME` without a file suffix in the commands'
+    help must be a packaged preset."""
+    import re
+
+    from splineimu.cli import _commands
+    from splineimu.imu.presets import list_presets
+
+    names = {m.group(1) for mod in _commands()
+             for m in re.finditer(r"--imu ([A-Za-z0-9_./]+)", getattr(mod, "DESCRIPTION", ""))
+             if "." not in m.group(1) and "/" not in m.group(1)}
+    assert names and names <= set(list_presets()), names - set(list_presets())
+
+
+def test_a_misspelt_scene_is_named_before_the_missing_output(tmp_path, capsys):
+    """`splineimu scene elipse` (no -o) said 'nothing to write' and hid the misspelt name."""
+    assert main(["scene", "elipse"]) == 1
+    err = capsys.readouterr().err
+    assert "got 'elipse'; did you mean 'ellipse'?" in err and "nothing to write" not in err
+    assert main(["scene", "ellipse"]) == 1
+    assert "nothing to write" in capsys.readouterr().err
+
+
+def test_order_2_is_refused_for_synthesis(capsys):
+    """--order 2 (accepted, though the help said 4 .. 6) fitted a piecewise-linear position spline:
+    the ellipse's accelerometer read gravity alone (a_x 1e-8 for -1.48 m/s^2) and the predicted
+    accel error was 7e-6 m/s^2."""
+    from splineimu.api.options import SplineOptions
+    from splineimu.errors import ConfigError
+
+    with pytest.raises(ConfigError, match="2 \\(piecewise linear\\) has no acceleration"):
+        SplineOptions(order=2)
+    assert SplineOptions(order=3).order == 3 and SplineOptions(order=8).order == 8
+    assert main(["from-tum", "poses.tum", "--order", "2", "-o", "never"]) == 1
+    assert "`--order` 2 (piecewise linear) has no acceleration" in capsys.readouterr().err
+
+
+def test_rate_and_timestamps_together_are_refused(tmp_path, capsys):
+    """--rate 50 with --timestamps was ignored in silence (the samples follow the file), on the
+    command line and in a scene file alike."""
+    from splineimu.api.scenefile import load_scene_file
+    from splineimu.errors import ConfigError
+
+    stamps = tmp_path / "stamps.txt"
+    stamps.write_text("".join(f"{i * 5_000_000}\n" for i in range(20)))
+    assert main(["scene", "static", "--timestamps", str(stamps), "--rate", "50", "-o", str(tmp_path / "o")]) == 1
+    assert "--rate and --timestamps are both given" in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()
+    f = tmp_path / "s.yaml"
+    f.write_text(f"motion: {{scene: static, duration_s: 1}}\nimu: {{rate_hz: 50, timestamps: {stamps}}}\n"
+                 "output: {dir: o}\n")
+    with pytest.raises(ConfigError, match=r"s.yaml:2: `imu.rate_hz` and `imu.timestamps` are both given"):
+        load_scene_file(f)
+    assert main(["scene", "static", "--timestamps", str(stamps), "-o", str(tmp_path / "o")]) == 0
+
+
+def test_tum_file_inside_the_output_folder_is_refused(tmp_path, capsys):
+    """`scene -o OUT --tum OUT/poses.tum` wrote the TUM file first: without --force the folder
+    was then refused for being non-empty (leaving OUT/poses.tum behind), with --force the
+    folder replaced it and the TUM file was gone, in silence."""
+    out = tmp_path / "out"
+    for extra in ([], ["--force"]):
+        assert main(["scene", "static", "--duration", "1", "-o", str(out), "--tum", str(out / "poses.tum"),
+                     *extra]) == 1
+        assert "lies in the output folder" in capsys.readouterr().err
+        assert not out.exists()
+    assert main(["scene", "static", "--duration", "1", "-o", str(out), "--tum", str(tmp_path / "poses.tum")]) == 0
+    assert (tmp_path / "poses.tum").is_file() and (out / "groundtruth.tum").is_file()

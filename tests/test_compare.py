@@ -232,7 +232,7 @@ def test_errors(files, tmp_path, capsys, monkeypatch):
         compare(str(tmp_path / "missing.tum"), files["ref"])
     bad = tmp_path / "bad.tum"
     bad.write_text("1.0 2 3\n")
-    with pytest.raises(InputError, match="8 entries per row"):
+    with pytest.raises(InputError, match=r"bad.tum:1: expected 8 columns \(timestamp tx ty tz qx qy qz qw\), got 3"):
         compare(str(bad), files["ref"])
     assert cli.main(["compare", str(bad), files["ref"]]) == 1
     err = capsys.readouterr().err
@@ -269,3 +269,84 @@ def test_real_trajectories_equal_evo(name, tmp_path):
         theirs = run_evo("ape", ["tum", str(ref), str(est), *EVO_ALIGN[align]])
         theirs += run_evo("rpe", ["tum", str(ref), str(est), *EVO_ALIGN[align], "-d", "2"])
         assert ours.pretty_str() + "\n" == theirs
+
+
+def test_nan_time_offset_is_refused_by_name(tmp_path):
+    """--t-offset nan reached evo and was reported as 'found no matching timestamps'."""
+    from splineimu.metrics import check_compare_options
+
+    with pytest.raises(ConfigError, match="`t_offset` must be finite, got nan"):
+        check_compare_options(t_offset=float("nan"))
+    ref = tmp_path / "ref.tum"
+    ref.write_text("".join(f"{i}.0 {i} 0 0 0 0 0 1\n" for i in range(5)))
+    with pytest.raises(ConfigError, match="t_offset"):
+        compare_files(ref, ref, t_offset=float("nan"))
+
+
+def test_a_euroc_csv_given_to_compare_is_named(tmp_path):
+    """A EuRoC ground truth or IMU csv given to compare got evo's 'TUM trajectory files must
+    have 8 entries per row' only; the message now says what the file looks like and what to give."""
+    gt = tmp_path / "data.csv"
+    gt.write_text("#timestamp, p_RS_R_x [m], p_RS_R_y [m], p_RS_R_z [m], q_RS_w []\n"
+                  + "".join(f"{i * 5000000},0,0,0,1,0,0,0" + ",0" * 9 + "\n" for i in range(5)))
+    ref = tmp_path / "ref.tum"
+    ref.write_text("".join(f"{i}.0 {i} 0 0 0 0 0 1\n" for i in range(5)))
+    with pytest.raises(InputError) as e:
+        compare_files(gt, ref)
+    assert str(e.value).endswith("the file looks like a EuRoC ground-truth csv (ns, p xyz, q wxyz, ...): "
+                                 "compare reads TUM trajectories, e.g. OUT/groundtruth.tum")
+
+
+def test_plot_is_written_in_the_format_its_name_gives(tmp_path):
+    """--plot out.pdf wrote PNG bytes under the .pdf name; the suffix now picks the format
+    (PNG without one) and an unknown suffix is refused."""
+    ref = tmp_path / "ref.tum"
+    ref.write_text("".join(f"{i}.0 {i} 0 0 0 0 0 1\n" for i in range(5)))
+    heads = {"a.pdf": b"%PDF", "a.png": b"\x89PNG", "a": b"\x89PNG"}
+    for name, magic in heads.items():
+        compare_files(ref, ref, plot=tmp_path / name)
+        assert (tmp_path / name).read_bytes()[:4] == magic, name
+    assert b"<svg" in compare_files(ref, ref, plot=tmp_path / "a.svg").plot_path.read_bytes()[:400]
+    with pytest.raises(ConfigError, match=r"cannot write a plot as '\.txt'"):
+        compare_files(ref, ref, plot=tmp_path / "a.txt")
+    assert not (tmp_path / "a.txt").exists()
+
+
+def test_few_associated_poses_are_noted(tmp_path, capsys):
+    """An estimate stamped in nanoseconds against a reference in seconds associated 1 of 399
+    poses (stamp 0) and printed that one pair's APE as the result, without a word."""
+    ref = tmp_path / "ref.tum"
+    est = tmp_path / "est.tum"
+    ref.write_text("".join(f"{i * 0.005:.3f} {i * 0.01} 0 0 0 0 0 1\n" for i in range(399)))
+    est.write_text("".join(f"{i * 5_000_000} {i * 0.01 + 0.5} 0 0 0 0 0 1\n" for i in range(399)))  # 0.5 m off
+    r = compare_files(est, ref)
+    assert r.n_associated == 1 and r.ape.stats["rmse"] == 0.5
+    assert r.notes == ["only 1 of 399 estimated and 399 reference poses were associated: the stamps span "
+                       "[0, 1.99e+09] s (estimate) and [0, 1.99] s (reference); check their units and --t-max-diff"]
+    assert cli.main(["compare", str(est), str(ref)]) == 0
+    assert capsys.readouterr().err.startswith("note: only 1 of 399 estimated")
+    assert compare_files(ref, ref).notes == []
+
+
+def test_zero_quaternion_and_empty_tum_are_named(tmp_path):
+    """evo reads a [0, 0, 0, 0] quaternion (it gave 5.8 deg of rotation APE, silently) and
+    answers a header-only file with 'TUM trajectory files must have 8 entries per row'."""
+    ref = tmp_path / "ref.tum"
+    ref.write_text("".join(f"{i}.0 {i} 0 0 0 0 0 1\n" for i in range(5)))
+    zq = tmp_path / "zq.tum"
+    zq.write_text("".join(f"{i}.0 {i} 0 0 0 0 0 {0 if i == 2 else 1}\n" for i in range(5)))
+    with pytest.raises(InputError) as e:
+        compare_files(zq, ref, pose_relation="angle_deg")
+    assert str(e.value) == f"{zq}:3: quaternion has zero norm: [0, 0, 0, 0]"
+    empty = tmp_path / "empty.tum"
+    empty.write_text("# timestamp tx ty tz qx qy qz qw\n")
+    with pytest.raises(InputError) as e:
+        compare_files(empty, ref)
+    assert str(e.value) == f"{empty}: no data rows (only comments, blank lines or a header)"
+
+
+def test_a_folder_given_as_a_trajectory_is_named_a_folder(tmp_path):
+    """A folder given to compare was reported as 'no such file'."""
+    with pytest.raises(InputError) as e:
+        compare_files(tmp_path, tmp_path)
+    assert str(e.value) == f"{tmp_path}: is a folder, expected a TUM file"

@@ -497,3 +497,124 @@ def test_imu_csv_stamp_beyond_int64_is_named_without_a_pandas_warning(tmp_path):
         with pytest.raises(InputError, match=r"imu\.csv:3: time stamp must be integer nanoseconds"):
             read_imu_csv(p)
     assert not [w for w in seen if issubclass(w.category, RuntimeWarning)], [str(w.message) for w in seen]
+
+
+def test_groundtruth_errors_do_not_call_the_file_imu_data(tmp_path):
+    """EuRoC's ground-truth header names its bias columns b_w_RS_S_x and b_a_RS_S_x: the format
+    guess matched the IMU's w_RS_S / a_RS_S first, and every error in a ground truth ended with
+    'the file looks like a EuRoC IMU csv ... it is IMU data, not poses'."""
+    from splineimu.io.euroc import EUROC_GROUNDTRUTH_HEADER
+    from splineimu.io.sniff import guess_format
+
+    rows = [f"{i * 5000000},0,0,0,1,0,0,0" + ",0" * 9 for i in range(5)]
+    rows[1] = "5000000,0,0,0,0,0,0,0" + ",0" * 9
+    p = tmp_path / "gt.csv"
+    p.write_text("\n".join([EUROC_GROUNDTRUTH_HEADER, *rows]) + "\n")
+    assert guess_format(p) == "euroc_gt"
+    with pytest.raises(InputError) as e:
+        read_euroc_groundtruth(p)
+    assert str(e.value) == f"{p}:3: quaternion has zero norm: [0, 0, 0, 0]"
+
+
+def test_too_few_columns_names_only_the_columns_expected(tmp_path):
+    """A short row of a ground truth read as 8 columns listed all 17 EuRoC names after
+    'expected 8 columns'."""
+    p = tmp_path / "gt.csv"
+    p.write_text("0,1,2,3,1,0,0,0\n5000000,1,2,3\n")
+    with pytest.raises(InputError) as e:
+        read_euroc_groundtruth(p)
+    msg = str(e.value)
+    assert "expected 8 columns (timestamp p_RS_R_x p_RS_R_y p_RS_R_z q_RS_w q_RS_x q_RS_y q_RS_z), got 4" in msg
+    assert "v_RS_R_x" not in msg and msg.startswith(f"{p}:2:")
+
+
+@pytest.mark.parametrize("text", ["", "# only a comment\n", "%YAML:1.0\n---\n"])
+def test_an_empty_imu_yaml_is_not_an_ideal_sensor(tmp_path, text):
+    """An empty (or truncated to its comments) IMU yaml was read as a sensor with no noise:
+    `scene --imu empty.yaml` wrote noise-free data and `calibrate --truth` compared with K = I."""
+    from splineimu.errors import ConfigError
+    from splineimu.imu.presets import load_imu_config
+
+    p = tmp_path / "imu.yaml"
+    p.write_text(text)
+    with pytest.raises(ConfigError) as e:
+        load_imu_config(p)
+    assert str(e.value) == f"{p}: holds no IMU parameters (empty); for a noise-free sensor give the preset `ideal`"
+    assert float(load_imu_config("ideal").gyroscope_noise_density[0]) == 0.0
+
+
+def test_a_repeated_yaml_key_is_refused(tmp_path):
+    """PyYAML keeps the last of two equal keys: a scene file with `motion:` twice ran the second
+    motion, and an imu.yaml with a density twice used the second one, without a word."""
+    from splineimu.errors import ConfigError
+    from splineimu.imu.presets import load_imu_config
+    from splineimu.yamldoc import parse_yaml
+
+    p = tmp_path / "imu.yaml"
+    p.write_text("gyroscope_noise_density: 0.1\naccelerometer_noise_density: 0.2\ngyroscope_noise_density: 0.3\n")
+    with pytest.raises(ConfigError) as e:
+        load_imu_config(p)
+    assert str(e.value) == f"{p}:3: key `gyroscope_noise_density` repeats the one on line 1"
+    with pytest.raises(ConfigError, match=r"s.yaml:4: key `scene` repeats the one on line 2"):
+        parse_yaml("motion:\n  scene: static\n  duration_s: 1\n  scene: ellipse\n", "s.yaml")
+    doc = parse_yaml("a: &x {b: 1}\nc:\n  <<: *x\n  d: 2\ne: {b: 1}\nf: {b: 2}\n", "m.yaml")  # merges, equal keys
+    assert doc.data["c"] == {"b": 1, "d": 2} and doc.data["f"] == {"b": 2}  # in different mappings are fine
+
+
+def test_imu_csv_stamps_are_exact_or_refused(tmp_path):
+    """EuRoC-size stamps written with '.0' were read through a float by the fast parser
+    (1403715273267142976.0 -> ...142912 ns, 200.003 Hz) and a stamp beyond int64 ended in an
+    OverflowError traceback; '1_000' was read as 1000 (Python's float()). A trailing comma and
+    a header line without '#' are read."""
+    from splineimu.io.imu_csv import read_imu_csv
+
+    def csv(name, rows):
+        p = tmp_path / name
+        p.write_text("".join(r + "\n" for r in rows))
+        return p
+
+    t0 = 1403715273262142976
+    dec = r"dec.csv:1: time stamp must be integer nanoseconds, got '1403715273262142976\.0'"
+    with pytest.raises(InputError, match=dec):
+        read_imu_csv(csv("dec.csv", [f"{t0 + i * 5_000_000}.0,0,0,0,0,0,9.81" for i in range(3)]))
+    with pytest.raises(InputError, match=r"big.csv:3: time stamp 9223372036859775807 ns does not fit a 64-bit"):
+        read_imu_csv(csv("big.csv", [f"{2**63 - 1 - 5_000_000 + i * 5_000_000},0,0,0,0,0,9.81" for i in range(3)]))
+    with pytest.raises(InputError, match=r"us.csv:2: non-numeric value in '5000000,1_000,0,0,0,0,9.81'"):
+        read_imu_csv(csv("us.csv", ["0,0,0,0,0,0,9.81", "5000000,1_000,0,0,0,0,9.81"]))
+    t, g, a = read_imu_csv(csv("ok.csv", ["timestamp,wx,wy,wz,ax,ay,az"]
+                                + [f"{t0 + i * 5_000_000},0,0,0.5,0,0,9.81," for i in range(3)]))
+    assert t.tolist() == [t0, t0 + 5_000_000, t0 + 10_000_000] and g[:, 2].tolist() == [0.5] * 3
+
+
+def test_absurd_imu_values_are_refused_with_their_line(tmp_path):
+    """A finite 1e300 passed the IMU reader: allan printed inf and numpy warnings, preintegrate
+    "`quat_xyzw` row 0 is not a valid quaternion (norm nan)", integrate "`positions` contains
+    NaN or inf"; no file or line was named."""
+    from splineimu.io.imu_csv import MAX_IMU_VALUE, read_imu_csv
+
+    p = tmp_path / "imu.csv"
+    rows = [f"{i * 5_000_000},0,0,0,0,0,9.81" for i in range(6)]
+    rows[3] = "15000000,0,0,0,0,-1e300,9.81"
+    p.write_text("#t,gx,gy,gz,ax,ay,az\n" + "\n".join(rows) + "\n")
+    with pytest.raises(InputError) as e:
+        read_imu_csv(p)
+    assert str(e.value) == (f"{p}:5: value -1e+300 (column 6) is beyond 1e+12 in magnitude: no IMU reads that "
+                            "(a unit or column mix-up?)")
+    rows[3] = f"15000000,0,0,{MAX_IMU_VALUE},0,0,9.81"  # the bound itself is read
+    p.write_text("\n".join(rows) + "\n")
+    assert read_imu_csv(p)[1][3, 2] == MAX_IMU_VALUE
+
+
+def test_a_quaternion_with_huge_components_is_normalized_not_zero(tmp_path):
+    """qw = 1e300 (finite) squared to inf: the norm was inf, the quaternion became 0 and the
+    run stopped with "`quat_xyzw` row 0 is not a valid quaternion (norm 0)" (no file, no line)
+    after a numpy overflow warning."""
+    import warnings
+
+    p = tmp_path / "poses.tum"
+    p.write_text("".join(f"{i}.0 0 0 0 0 0 1e300 1e300\n" for i in range(3)))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        tr = read_tum(p)
+    np.testing.assert_allclose(tr.quat_xyzw, np.tile([0.0, 0.0, 2**-0.5, 2**-0.5], (3, 1)), rtol=0, atol=1e-15)
+    assert any("worst: 1.41421e+300 on line 1" in n for n in tr.notices)

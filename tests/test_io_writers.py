@@ -120,3 +120,24 @@ def test_staged_path_replaces_only_on_success(tmp_path):
         (tmp / "b").write_text("2")
         raise RuntimeError("interrupted")
     assert os.listdir(tmp_path) == ["result"] and os.listdir(target) == ["a"]
+
+
+def test_output_folder_dot_is_the_current_folder(tmp_path, monkeypatch):
+    """`-o .` in an empty folder failed with "output folder '.' exists and is not empty": the
+    temporary sibling of '.' (which has no name) was made inside it. '.' and '..' now stand
+    for the folders they name."""
+    from splineimu.errors import OutputExistsError
+    from splineimu.io.files import OutputFolder
+
+    (tmp_path / "sub").mkdir()
+    monkeypatch.chdir(tmp_path / "sub")
+    with OutputFolder(".") as tmp:
+        (tmp / "a.txt").write_text("new")
+    assert sorted(p.name for p in (tmp_path / "sub").iterdir()) == ["a.txt"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["sub"]  # nothing left beside it
+    monkeypatch.chdir(tmp_path / "sub")  # the new folder (the old one was replaced)
+    with pytest.raises(OutputExistsError):
+        OutputFolder(".")
+    with OutputFolder("..", force=True) as tmp:
+        (tmp / "b.txt").write_text("replaced")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["b.txt"]

@@ -641,3 +641,71 @@ def test_cli_on_real_euroc(shared_data, tmp_path):
     assert df["err_p_m"].max() < 0.1  # per 1 s window (measured 0.050 m)
     assert df["err_v_m_s"].max() < 0.2  # (measured 0.10 m/s)
     assert df["err_theta_deg"].max() < 0.5  # (measured 0.26 deg)
+
+
+def test_noise_free_folder_says_why_there_is_no_nees(tmp_path, capsys):
+    """A noise-free scene's imu.yaml has all densities 0: the covariance is zero, and the
+    windows without NEES were put down to 'too few samples' (they had 201 each)."""
+    from splineimu.cli import main
+
+    out = tmp_path / "o"
+    assert main(["scene", "static", "--duration", "3", "-o", str(out)]) == 0
+    capsys.readouterr()
+    assert main(["preintegrate", str(out), "--every", "200"]) == 0
+    text = capsys.readouterr().out
+    assert "3 windows without NEES (the noise densities are all 0)" in text
+    assert "too few samples" not in text
+
+
+def test_window_stamps_outside_the_span_say_where_they_are():
+    """--stamps in another unit (1e9 in a file read as seconds) only said 'fewer than 2 stamps
+    inside the span': the message now shows the span the given stamps cover."""
+    from splineimu.preintegration import make_windows
+
+    t = np.arange(0, 10_000_000_001, 5_000_000)
+    with pytest.raises(ConfigError) as e:
+        make_windows(t, t, stamps_ns=np.array([0, 10**18, 2 * 10**18]))
+    assert str(e.value).endswith("span [0, 10000000000] ns (the 3 given span [0, 2000000000000000000] ns)")
+
+
+def test_windows_across_a_gap_of_the_imu_stamps_are_noted():
+    """A window across 1 s of missing IMU samples had 3 m of error (6e-5 m in the others) and the
+    table alone showed it (dt 2 s, 201 samples); the result now carries a note."""
+    from splineimu.groundtruth import GroundTruth
+    from splineimu.preintegration import evaluate_windows
+
+    t = np.array([i * 5_000_000 for i in range(1000) if not 300 < i < 500], dtype=np.int64)
+    z, g = np.zeros((t.size, 3)), np.tile([0.0, 0.0, 9.81], (t.size, 1))
+    gt_t = np.arange(0, 5_000_000_001, 1_000_000_000)
+    one = np.zeros((gt_t.size, 3))
+    gt = GroundTruth(gt_t, one, np.tile([0.0, 0.0, 0.0, 1.0], (gt_t.size, 1)), one, one, one)
+    windows = np.array([[0, 1_000_000_000], [1_000_000_000, 3_000_000_000], [3_000_000_000, 4_000_000_000]])
+    r = evaluate_windows(t, z, g, gt, windows)
+    assert r.notes == ["1 gap(s) in the IMU stamps longer than 1.5 sample intervals lie inside windows (longest "
+                       "1 s, 1.5 s after the first window's start): a window's deltas across a gap come from the "
+                       "gap's two end samples alone"]
+    assert evaluate_windows(t, z, g, gt, windows[[0, 2]]).notes == []
+
+
+def test_non_finite_gravity_is_refused():
+    """--gravity 0 0 nan gave NaN errors in every window and exit code 0 (integrate refuses it)."""
+    from splineimu.groundtruth import GroundTruth
+    from splineimu.preintegration import evaluate_windows
+
+    t = np.arange(0, 2_000_000_001, 5_000_000, dtype=np.int64)
+    z, g = np.zeros((t.size, 3)), np.tile([0.0, 0.0, 9.81], (t.size, 1))
+    gt_t = np.array([0, 2_000_000_000])
+    one = np.zeros((2, 3))
+    gt = GroundTruth(gt_t, one, np.tile([0.0, 0.0, 0.0, 1.0], (2, 1)), one, one, one)
+    with pytest.raises(InputError, match="`gravity` contains NaN or inf"):
+        evaluate_windows(t, z, g, gt, np.array([[0, 1_000_000_000]]), gravity=[0.0, 0.0, np.nan])
+    r = evaluate_windows(t, z, g, gt, np.array([[0, 1_000_000_000]]))
+    assert r.error_p_m[0] < 1e-12
+
+
+def test_a_file_given_as_the_folder_is_named(tmp_path):
+    """`preintegrate imu.csv` said 'IMU csv not found: imu.csv/mav0/imu0/data.csv'."""
+    p = tmp_path / "imu.csv"
+    p.write_text("0,0,0,0,0,0,9.81\n")
+    with pytest.raises(ConfigError, match=r"imu.csv is a file, not an output folder: give the folder"):
+        evaluate_recording(p)

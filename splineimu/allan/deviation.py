@@ -118,7 +118,10 @@ def default_cluster_factors(n_samples: int, points_per_decade: float = 10.0,
     if m_max == 1:
         return np.array([1], dtype=np.int64)
     decades = math.log10(m_max)
-    num = max(2, int(math.ceil(points_per_decade * decades)) + 1)
+    num = max(2, int(math.ceil(min(points_per_decade * decades, 1e9))) + 1)
+    # from 2 m_max ln(m_max) points on, neighbours are < 1 apart even at the top: every integer
+    # 1..m_max is taken, and a denser grid (e.g. 1e9 per decade) only costs memory
+    num = min(num, int(math.ceil(2.0 * m_max * math.log(m_max))) + 2)
     m = np.unique(np.round(np.logspace(0.0, decades, num)).astype(np.int64))
     return m[(m >= 1) & (m <= m_max)]
 

@@ -20,7 +20,7 @@ from ..calibration.estimate import calibrate_accel, calibrate_gyro
 from ..calibration.options import CalibrationOptions
 from ..calibration.report import chi2_summary, estimates_table, phase_table
 from ..calibration.result import SensorCalibration
-from ..errors import ConfigError, OutputExistsError
+from ..errors import ConfigError, InputError, OutputExistsError
 from ..imu.config import load_imu_config
 from ..io.calibration_yaml import check_calibration_target, write_calibration_yaml
 from ..io.dataset import GROUNDTRUTH_CSV, dataset_file, dataset_root
@@ -108,10 +108,20 @@ def _data_folder(csv_path: Path) -> Path:
 
 
 def _report(folder: Path):
+    """The data folder's report.json (None without one); one that exists but is not JSON is an
+    error, not a silent g = 9.81 and no table rate."""
+    path = folder / "report.json"
+    advice = "it gives g and the table rates: repair it, or give --gravity-magnitude / --table-rate"
     try:
-        return json.loads((folder / "report.json").read_text(encoding="utf-8"))
-    except (OSError, ValueError):
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
         return None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"cannot read ({getattr(exc, 'strerror', None) or exc}); {advice}", path=path) from None
+    try:
+        return json.loads(text)
+    except ValueError as exc:
+        raise InputError(f"not valid JSON ({exc.msg}); {advice}", path=path, line=exc.lineno) from None
 
 
 def _gravity(given, report):
@@ -126,7 +136,7 @@ def _gravity(given, report):
 
 def _table_rates(given, report):
     if given:
-        return [positive_float(r, "table_rates_rad_s") for r in np.atleast_1d(given)], "--table-rate"
+        return [positive_float(r, "table_rates_rad_s") for r in np.atleast_1d(given).tolist()], "--table-rate"
     try:
         src = report["source"]
         if src.get("name") == "rate-table":
@@ -209,8 +219,11 @@ def calibrate_file(path, sensor: str, options: CalibrationOptions | None = None,
         check_calibration_target(target, [sensor], force)
     csv = Path(path)
     folder = _data_folder(csv)
-    report = _report(folder)
+    given = gravity_m_s2 is not None if sensor == "accelerometer" else bool(table_rates_rad_s)
+    report = None if given else _report(folder)  # read only for what was not given
     t_ns, gyro, accel = read_imu_csv(csv)
+    if t_ns.shape[0] < 3:  # the segmentation's own check does not know the file
+        raise InputError(f"need at least 3 IMU samples for a calibration, got {t_ns.shape[0]}", path=csv)
     if sensor == "accelerometer":
         g, g_src = _gravity(gravity_m_s2, report)
         cal = calibrate_accel(t_ns, accel, g, gyro=gyro, options=options)

@@ -10,8 +10,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import ConfigError, InputError
 from ..io.files import staged_path
+from ..io.poses import ZERO_NORM_TOL
 from ..io.tum import read_tum
 from ..metrics import CompareResult, _evo, check_compare_options
 from ..metrics import compare as compare_trajectories
@@ -30,15 +31,30 @@ def load_tum(path):
     _, _, _, file_interface = _evo()
     p = Path(path)
     if not p.is_file():
-        raise InputError("no such file", path=p)
+        raise InputError("is a folder, expected a TUM file" if p.is_dir() else "no such file", path=p)
     try:
         traj = file_interface.read_tum_trajectory_file(str(p))
     except Exception as exc:
-        raise InputError(str(exc) or type(exc).__name__, path=p) from None
-    if not all(np.isfinite(a).all() for a in (traj.timestamps, traj.positions_xyz, traj.orientations_quat_wxyz)):
+        from ..io.sniff import add_format_hint
+
+        _raise_tum_problem(p)  # our reader names an empty file or a bad line; evo's words otherwise
+        raise add_format_hint(InputError(str(exc) or type(exc).__name__, path=p), p, "tum",
+                              use="compare reads TUM trajectories, e.g. OUT/groundtruth.tum") from None
+    q = np.asarray(traj.orientations_quat_wxyz)
+    if not all(np.isfinite(a).all() for a in (traj.timestamps, traj.positions_xyz, q)) or \
+            not (np.linalg.norm(q, axis=1) >= ZERO_NORM_TOL).all():  # evo takes [0, 0, 0, 0] (5.8 deg of APE)
         read_tum(p, min_poses=1, repeated_stamps="first")  # names the line and the value
-        raise InputError("holds a value that is not a finite number", path=p)
+        raise InputError("holds a value that is not a finite number or a zero quaternion", path=p)
     return traj
+
+
+def _raise_tum_problem(path) -> None:
+    """Raise :func:`read_tum`'s InputError (the file, line and columns) for a TUM file evo cannot
+    read; returns when :func:`read_tum` reads it (tabs, extra columns) or it is another format."""
+    from ..io.sniff import guess_format
+
+    if guess_format(path) in (None, "tum"):
+        read_tum(path, min_poses=1, repeated_stamps="first")
 
 
 def compare(est, ref, *, metric: str = "ape", pose_relation: str = "trans", align: str = "none",
@@ -67,7 +83,8 @@ def compare(est, ref, *, metric: str = "ape", pose_relation: str = "trans", alig
         As :func:`splineimu.metrics.compare`.
     """
     _evo()
-    check_compare_options(metric, pose_relation, align, delta, delta_unit, t_max_diff)  # before any file is read
+    # before any file is read
+    check_compare_options(metric, pose_relation, align, delta, delta_unit, t_max_diff, t_offset)
     est, ref = (load_tum(x) if isinstance(x, (str, Path)) else x for x in (est, ref))
     return compare_trajectories(est, ref, metric=metric, pose_relation=pose_relation, align=align, delta=delta,
                                 delta_unit=delta_unit, all_pairs=all_pairs, t_max_diff=t_max_diff, t_offset=t_offset)
@@ -141,6 +158,9 @@ def plot_compare(result: CompareResult, path) -> Path:
         ax.set_title(r.title, fontsize="small")
         ax.legend(loc="best", fontsize="small")
     out = Path(path)
+    fmt = out.suffix[1:].lower() or "png"  # the name's format (plot.pdf was PNG bytes), PNG without a suffix
+    if fmt not in fig.canvas.get_supported_filetypes():
+        raise ConfigError(f"cannot write a plot as '.{fmt}' ({out}); give .png, .pdf or .svg", option="--plot")
     with staged_path(out) as tmp:  # a failure or an interrupt leaves what was there
-        fig.savefig(tmp, dpi=110, format="png")
+        fig.savefig(tmp, dpi=110, format=fmt)
     return out

@@ -6,7 +6,7 @@ Reads an EuRoC IMU csv and the ground truth for its initial state, and integrate
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -41,6 +41,8 @@ class DeadReckoning:
         Distance to the ground truth at the last stamp; None when that lies outside it.
     integrate_time_s : float
         Wall time of the integration alone [s] (for the command's report; not a result).
+    notes : list of str
+        What the result depends on that the input did not say (gaps between the IMU stamps).
     """
 
     trajectory: Trajectory
@@ -51,6 +53,7 @@ class DeadReckoning:
     final_position_error_m: float | None = None
     integrate_time_s: float = 0.0
     sampling: str = "point"
+    notes: list = field(default_factory=list)
 
     @property
     def method(self) -> str:
@@ -134,7 +137,8 @@ def dead_reckon(imu_path, init=None, method: str = "rk4", gravity=DEFAULT_GRAVIT
     gt_path = Path(init) if init is not None else default_groundtruth_path(imu_path)
     if not gt_path.is_file():
         hint = "" if init is not None else " (the default beside the IMU file); pass --init GROUND_TRUTH"
-        raise ConfigError(f"initial-state file not found: {gt_path}{hint}")
+        what = "is a folder, expected the ground-truth csv" if gt_path.is_dir() else "not found"
+        raise ConfigError(f"initial-state file {what}: {gt_path}{hint}")
     one_of(method, "method", METHODS)
     t_ns, gyro, accel = read_imu_csv(imu_path)
     gt = read_groundtruth(gt_path)
@@ -155,4 +159,18 @@ def dead_reckon(imu_path, init=None, method: str = "rk4", gravity=DEFAULT_GRAVIT
     if gt.covers(t_ns[-1]):
         err = float(np.linalg.norm(traj.position_world[-1] - gt.state_at(t_ns[-1]).position_world))
     return DeadReckoning(traj, t_ns, imu_path, gt_path, skipped_samples=i0, final_position_error_m=err,
-                         integrate_time_s=elapsed, sampling=sampling)
+                         integrate_time_s=elapsed, sampling=sampling, notes=_gap_notes(t_ns))
+
+
+def _gap_notes(t_ns) -> list:
+    """A note on stamp gaps longer than 1.5 median intervals: a step across one integrates the
+    motion in between from its two end samples alone (1 s missing from the ellipse: 17 m)."""
+    d = np.diff(t_ns)
+    med = float(np.median(d))
+    gaps = np.flatnonzero(d > 1.5 * med)
+    if gaps.size == 0:
+        return []
+    k = int(gaps[np.argmax(d[gaps])])
+    return [f"{gaps.size} gap(s) in the IMU stamps longer than 1.5 sample intervals (longest {d[k] / 1e9:.6g} s "
+            f"after {(t_ns[k] - t_ns[0]) / 1e9:.6g} s): the motion across a gap is integrated from its two end "
+            "samples alone"]

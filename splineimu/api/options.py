@@ -318,7 +318,7 @@ class SplineOptions(_Checked):
     ----------
     kind : {"split", "se3"}
     order : int or "auto"
-        Spline order 2..8 (4 is cubic); ``"auto"`` picks the best predicted of 4, 5, 6.
+        Spline order 3..8 (4 is cubic; 2 has no acceleration); ``"auto"``: the best predicted of 4, 5, 6.
     knot_spacing_s : float or "auto"
     smoothness : float, optional
         Relative weight of the smoothness penalty (the fit's default when None).
@@ -337,6 +337,9 @@ class SplineOptions(_Checked):
         self.kind = self._choice("kind", ("split", "se3"))
         name, kw = self._kw("order")
         self.order = _auto_or(self.order, lambda v: int_in_range(v, name, 2, 8, **kw))
+        if self.order == 2:  # the fit takes it; the IMU read gravity alone (ellipse: a_x 0 for -1.48 m/s^2)
+            raise self._err("order", "2 (piecewise linear) has no acceleration: the specific force would be gravity "
+                                     "alone; give 3..8 (4 is cubic) or auto")
         name, kw = self._kw("knot_spacing_s")
         self.knot_spacing_s = _auto_or(self.knot_spacing_s, lambda v: positive_float(v, name, **kw))
         if self.smoothness is not None:

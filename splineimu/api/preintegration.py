@@ -56,6 +56,9 @@ def evaluate_recording(folder, *, imu_csv=None, groundtruth=None, every=None, st
         Unreadable files.
     """
     out = Path(folder)
+    if out.is_file() and not (imu_csv and groundtruth):  # said "IMU csv not found: imu.csv/mav0/imu0/data.csv"
+        raise ConfigError(f"{out} is a file, not an output folder: give the folder (OUT of splineimu scene / "
+                          "from-tum), or the files with --imu-csv and --groundtruth")
     imu_path = Path(imu_csv) if imu_csv else dataset_file(out, IMU_CSV)
     gt_path = Path(groundtruth) if groundtruth else dataset_file(out, GROUNDTRUTH_CSV)
     for p, what in ((imu_path, "IMU csv"), (gt_path, "ground truth")):

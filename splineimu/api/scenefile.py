@@ -172,6 +172,9 @@ def job_from_document(doc, base) -> SynthesisJob:
                         ("kind", "order", "knot_spacing_s", "smoothness", "keep_outliers"))
         source = _build(PosesInput, doc, m, ("motion",), ("path", "format", "repeated_stamps", "max_gap_s", "gaps"),
                         spline=spline)
+    if imu.get("timestamps") is not None and imu.get("rate_hz") is not None:  # the rate was ignored in silence
+        raise doc.error("`imu.rate_hz` and `imu.timestamps` are both given: the samples are at the file's "
+                        "stamps; remove rate_hz", "imu", "rate_hz")
     if "seed" in top:
         imu["seed"] = top["seed"]
     imu_opts = _build(ImuOptions, doc, imu, ("imu",), ("rate_hz", "timestamps", "model", "extrinsic", "gravity",

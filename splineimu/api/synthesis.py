@@ -227,6 +227,12 @@ def _check_output(job, write):
             check_not_input(job.output.dir, inputs)
         if job.output.tum is not None:
             check_output_file(job.output.tum, job.output.force, inputs, option="--tum")
+            if job.output.dir is not None:  # written first, then removed (--force) or in the way of the folder
+                tum, out = Path(job.output.tum).resolve(), Path(job.output.dir).resolve()
+                if tum == out or out in tum.parents:
+                    raise ConfigError(f"--tum '{job.output.tum}' lies in the output folder '{job.output.dir}', which "
+                                      "is written as a whole: give a path outside it (OUT/groundtruth.tum holds the "
+                                      "poses too)", option="--tum")
 
 
 def _input_files(job) -> list:

@@ -96,7 +96,7 @@ def add_pose_args(p: argparse.ArgumentParser, fmt_help: str):
     g.add_argument("--spline", choices=["split", "se3"],
                    help="split: R3 x SO3 (default, decoupled); se3: Lovegrove et al.'s cumulative SE3")
     g.add_argument("--order", metavar="K",
-                   help="spline order 4 (cubic) .. 6, or auto (default: the best predicted of 4, 5, 6)")
+                   help="spline order 3 .. 8 (4 is cubic), or auto (default: the best predicted of 4, 5, 6)")
     g.add_argument("--knot-spacing", metavar="S",
                    help="knot spacing in seconds, or auto (default: minimizes the predicted IMU error)")
     g.add_argument("--smoothness", type=float, metavar="MU",
@@ -140,8 +140,12 @@ def options_from_args(args, motion: str):
     from pathlib import Path
 
     from ..api.options import FlagOrigin, ImuOptions, OutputOptions, PosesInput, SceneInput, SplineOptions, SynthesisJob
+    from ..errors import ConfigError
 
     o = FlagOrigin()
+    if args.timestamps is not None and args.rate is not None:  # the rate was ignored in silence
+        raise ConfigError("--rate and --timestamps are both given: the samples are at the file's stamps; drop --rate",
+                          option="--rate")
     if motion == "scene":
         source = SceneInput(args.name, **_given(args, duration_s="duration", t0_ns="t0_ns"),
                             params=_params(args.param), origin=o)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import sys
+
 NAME = "compare"
 HELP = "APE / RPE of an estimated TUM trajectory against a reference (needs evo)"
 ORDER = 60
@@ -57,6 +59,8 @@ def run(args) -> int:
     res = compare_files(args.est, args.ref, plot=args.plot, metric=args.metric, pose_relation=args.pose_relation,
                         align=args.align, delta=args.delta, delta_unit=args.delta_unit, all_pairs=args.all_pairs,
                         t_max_diff=args.t_max_diff, t_offset=args.t_offset)
+    for note in res.notes:
+        print(f"note: {note}", file=sys.stderr)
     for r in res.results:
         if r.delta_frames is not None:
             print(f"(delta {args.delta:g} s = {r.delta_frames} frames)")

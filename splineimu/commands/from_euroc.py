@@ -11,7 +11,7 @@ Like from-tum, for EuRoC's state_groundtruth_estimate0/data.csv (quaternion w fi
 
 examples:
   splineimu from-euroc V1_02_medium/mav0/state_groundtruth_estimate0/data.csv -o out \\
-      --timestamps V1_02_medium/mav0/imu0/data.csv --imu euroc
+      --timestamps V1_02_medium/mav0/imu0/data.csv --imu adis16448
 """
 
 

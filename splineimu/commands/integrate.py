@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import sys
+
 NAME = "integrate"
 HELP = "dead-reckon an IMU csv (EuRoC mav0/imu0/data.csv) into a TUM trajectory"
 ORDER = 50
@@ -55,6 +57,8 @@ def run(args) -> int:
     check_output_file(args.output, args.force, inputs=[args.imu_csv, args.init])
     res = dead_reckon(args.imu_csv, init=args.init, method=args.method, gravity=args.gravity,
                       sampling=args.sampling)
+    for note in res.notes:
+        print(f"note: {note}", file=sys.stderr)
     if res.skipped_samples:
         print(f"skipping {res.skipped_samples} IMU samples before the ground truth starts")
     out = res.write_tum(args.output)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import sys
+
 NAME = "preintegrate"
 HELP = "preintegrate an output folder's IMU over windows and compare the deltas with ground truth"
 ORDER = 55
@@ -75,6 +77,8 @@ def run(args) -> int:
                              every=args.every, stamps=args.stamps, imu=args.imu, method=args.method,
                              covariance=args.covariance, gravity=args.gravity, sampling=args.sampling)
     df = res.to_dataframe()
+    for note in res.notes:
+        print(f"note: {note}", file=sys.stderr)
     print(f"{len(df)} windows, {args.method} / {args.covariance}; noise: "
           f"{res.noise_source if res.noise is not None else 'none (no NEES)'}")
     print(res.format_table(limit=None if args.all else 40))
@@ -82,7 +86,8 @@ def run(args) -> int:
           f"theta {df['err_theta_deg'].max():.3e} deg")
     if res.noise is not None:
         if res.n_nees < len(df):
-            print(f"{len(df) - res.n_nees} windows without NEES (singular covariance: too few samples)")
+            why = "the noise densities are all 0" if res.noise_free else "singular covariance: too few samples"
+            print(f"{len(df) - res.n_nees} windows without NEES ({why})")
         test = res.nees_test()
         if test is not None:
             print(f"mean NEES {test.mean:.3f} (9 dof; 95% interval for {test.n_windows} windows "

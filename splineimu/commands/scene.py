@@ -47,6 +47,7 @@ def run(args) -> int:
         return 0
     if not args.name:
         raise ConfigError("give a scene name (or --list)")
+    job = options_from_args(args, "scene")  # first: a misspelt scene or flag is the error to name
     if not args.out and not args.tum:
         raise ConfigError("nothing to write: give -o OUT and/or --tum FILE")
-    return run_synthesis(options_from_args(args, "scene"))
+    return run_synthesis(job)

@@ -307,4 +307,7 @@ def read_imu_yaml(path):
     doc = read_yaml(path, "IMU configuration file")
     if not isinstance(doc.data, dict):
         raise ConfigError(f"expected a mapping of IMU parameters, got {type(doc.data).__name__}", path=doc.name)
+    if not doc.data:  # an empty or truncated file would silently be a noise-free, ideal sensor
+        raise ConfigError("holds no IMU parameters (empty); for a noise-free sensor give the preset `ideal`",
+                          path=doc.name)
     return doc

@@ -27,6 +27,24 @@ def plot_allan(result: AllanResult, fit: NoiseFit | None, path, title: str = "")
     groups = [(range(0, 3), "gyroscope", "rad/s"), (range(3, 6), "accelerometer", "m/s$^2$")] if K == 6 \
         else [(range(K), "", "")]
     fig, axes = plt.subplots(1, len(groups), figsize=(6.4 * len(groups), 5.0), squeeze=False)
+    import warnings
+
+    with warnings.catch_warnings():  # a noise-free axis (all 0) has nothing to draw on a log scale
+        warnings.filterwarnings("ignore", "Data has no positive values", UserWarning)
+        _draw(fig, axes, groups, result, fit, K, title)
+    import io
+
+    from .files import atomic_write_bytes
+
+    buf = io.BytesIO()
+    try:
+        fig.savefig(buf, format="png", dpi=110)
+    finally:
+        plt.close(fig)
+    atomic_write_bytes(Path(path), buf.getbuffer())
+
+
+def _draw(fig, axes, groups, result, fit, K, title):
     colors = ["tab:red", "tab:green", "tab:blue"]
     taus = result.taus_s
     for ax, (cols, name, unit) in zip(axes[0], groups):
@@ -53,7 +71,8 @@ def plot_allan(result: AllanResult, fit: NoiseFit | None, path, title: str = "")
             if marks.size:
                 lo = min(lo, marks.min())
         hi = np.nanmax(result.adev_ci95[:, list(cols), 1][np.isfinite(result.adev_ci95[:, list(cols), 1])])
-        ax.set_ylim(lo / 2.0, hi * 2.0)
+        if lo > 0.0 and 0.0 < hi < np.inf:  # else (a noise-free recording: all 0) matplotlib's own limits
+            ax.set_ylim(lo / 2.0, hi * 2.0)
         ax.set_xlim(taus[0] / 1.3, taus[-1] * 1.3)
         ax.grid(True, which="major", alpha=0.5)
         ax.grid(True, which="minor", alpha=0.15)
@@ -76,13 +95,3 @@ def plot_allan(result: AllanResult, fit: NoiseFit | None, path, title: str = "")
     if title:
         fig.suptitle(title, fontsize=10)
     fig.tight_layout()
-    import io
-
-    from .files import atomic_write_bytes
-
-    buf = io.BytesIO()
-    try:
-        fig.savefig(buf, format="png", dpi=110)
-    finally:
-        plt.close(fig)
-    atomic_write_bytes(Path(path), buf.getbuffer())

@@ -82,12 +82,27 @@ def recorded_sampling(imu_csv) -> str:
 
     Read from ``report.json`` (key ``imu.sampling``) in the csv's output folder
     (:func:`dataset_root`); ``"point"`` when there is none or it does not say.
+
+    Raises
+    ------
+    InputError
+        ``report.json`` exists but cannot be read or is not JSON (taking such a folder's mean
+        samples for point values costs the ellipse 0.24 m in 10 s, in silence).
     """
+    from ..errors import InputError
+
     report = dataset_root(imu_csv) / "report.json"
+    advice = "it records how the samples were taken: repair it, or give --sampling point|mean"
     try:
-        data = json.loads(report.read_text())
-    except (OSError, ValueError):
+        text = report.read_text(encoding="utf-8")
+    except FileNotFoundError:
         return "point"
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"cannot read ({getattr(exc, 'strerror', None) or exc}); {advice}", path=report) from None
+    try:
+        data = json.loads(text)
+    except ValueError as exc:
+        raise InputError(f"not valid JSON ({exc.msg}); {advice}", path=report, line=exc.lineno) from None
     sampling = data.get("imu", {}).get("sampling") if isinstance(data, dict) else None
     return "mean" if sampling == "mean" else "point"
 

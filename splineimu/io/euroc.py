@@ -303,6 +303,13 @@ def read_groundtruth(path) -> GroundTruth:
     InputError
         Unreadable file, or fewer columns (no velocity and biases).
     """
+    from ..errors import InputError
     from ..groundtruth import GroundTruth
+    from .sniff import add_format_hint
 
-    return GroundTruth.from_track(read_euroc_groundtruth(Path(path)))
+    try:
+        track = _read_groundtruth(Path(path), 2, "error")
+    except InputError as exc:  # the advice of read_euroc_groundtruth (use from-tum) is for synthesis
+        raise add_format_hint(exc, path, "euroc_gt", use="this needs the 17-column EuRoC ground truth, "
+                              "e.g. OUT/mav0/state_groundtruth_estimate0/data.csv") from None
+    return GroundTruth.from_track(track)

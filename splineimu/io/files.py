@@ -302,7 +302,9 @@ class OutputFolder:
     """
 
     def __init__(self, out_dir, force: bool = False):
-        self.path = Path(out_dir)
+        path = Path(out_dir)
+        # "." and ".." have no name of their own: the temporary sibling would land inside them
+        self.path = Path(os.path.abspath(path)) if path.name in ("", "..") and str(out_dir) else path
         self.force = bool(force)
         self.tmp: Path | None = None
         self._made_parents: list[Path] = []

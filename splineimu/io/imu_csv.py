@@ -42,6 +42,10 @@ from ..validation import as_rate_hz
 __all__ = ["read_imu_csv", "read_imu_table", "read_static_rda", "load_recording", "ImuRecording",
            "GYRO_UNITS", "ACCEL_UNITS", "STANDARD_GRAVITY", "RECORDING_FORMATS"]
 
+#: Largest |gyro| or |accel| value an IMU csv may hold (far beyond any sensor in any unit); 1e300 passed
+#: the reader and overflowed the analyses into inf, NaN quaternions and numpy warnings.
+MAX_IMU_VALUE = 1e12
+
 #: Standard gravity [m/s^2] used to convert "g" (ISO 80000-3).
 STANDARD_GRAVITY = 9.80665
 
@@ -76,6 +80,14 @@ def _check_stamps(t_ns, path, line_of_row):
                          path, line_of_row(i))
 
 
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
 def _parse_slow(path):
     """Line-by-line parser: exact messages with line numbers (used when the fast path fails)."""
     t, v, lines = [], [], []
@@ -85,14 +97,23 @@ def _parse_slow(path):
             if not s or s.startswith("#"):
                 continue
             parts = [p.strip() for p in s.split(",")]
+            if len(parts) == 8 and not parts[-1]:  # a trailing comma
+                parts.pop()
+            if not t and len(parts) == 7 and not any(_is_number(p) for p in parts):
+                continue  # a header without '#' (timestamp,wx,wy,...)
             if len(parts) != 7:
                 raise InputError("expected 7 comma-separated fields (t_ns, gyro xyz, accel xyz), "
                                  f"got {len(parts)}", path, lineno)
+            if "_" in s:  # Python's int() and float() take 1_000 as 1000; a csv number has no underscore
+                raise InputError(f"non-numeric value in {s!r}", path, lineno)
             try:
                 tn = int(parts[0])
             except ValueError:
                 raise InputError(f"time stamp must be integer nanoseconds, got {parts[0]!r}",
                                  path, lineno) from None
+            if not -(2**63) <= tn < 2**63:
+                raise InputError(f"time stamp {parts[0]} ns does not fit a 64-bit integer (after the year 2262)",
+                                 path, lineno)
             try:
                 vals = [float(p) for p in parts[1:]]
             except ValueError:
@@ -176,6 +197,11 @@ def _read_imu_table(path):
         return _line_of_data_row(path, i)
 
     _check_stamps(t_ns, path, line_of_row)
+    big = np.abs(vals) > MAX_IMU_VALUE
+    if big.any():
+        i, j = (int(x[0]) for x in np.nonzero(big))
+        raise InputError(f"value {vals[i, j]:g} (column {j + 2}) is beyond {MAX_IMU_VALUE:g} in magnitude: no IMU "
+                         "reads that (a unit or column mix-up?)", path, line_of_row(i))
     check_ns_spacing(t_ns, path=path, advice="an EuRoC IMU csv has integer nanoseconds: convert the column")
     return t_ns, vals
 
@@ -215,8 +241,9 @@ def _read_fast(path):
     import pandas as pd
 
     kw = dict(comment="#", header=None, skip_blank_lines=True, engine="c", low_memory=False,
-              dtype={0: np.int64, 1: np.float64, 2: np.float64, 3: np.float64,
-                     4: np.float64, 5: np.float64, 6: np.float64})
+              # column 0 inferred: forced to int64, pandas took "1403715273262142976.0" or "1e9" as a float
+              # and cast it (to ...142912 ns) in silence; inferred, only all-integer text is int64
+              dtype={1: np.float64, 2: np.float64, 3: np.float64, 4: np.float64, 5: np.float64, 6: np.float64})
     if _pandas_rounds_last_ulp():
         kw["float_precision"] = "round_trip"  # pandas < 3.1 parses some decimals 1 ulp off
     size = path.stat().st_size
@@ -239,7 +266,7 @@ def _read_fast(path):
 
             with ThreadPoolExecutor(max_workers=parts) as pool:
                 frames = list(pool.map(part, range(parts)))
-    if any(f.shape[1] != 7 for f in frames if len(f)):
+    if any(f.shape[1] != 7 or f[0].dtype != np.int64 for f in frames if len(f)):
         return None, None
     frames = [f for f in frames if len(f)]
     n = sum(len(f) for f in frames)
@@ -439,6 +466,9 @@ def load_recording(path, fmt=None, rate_hz=None, gyro_unit=None, accel_unit=None
     d = np.diff(t_ns)
     med = float(np.median(d))
     rate = 1e9 / med if rate_hz is None else rate_hz
+    if rate_hz is not None and abs(rate_hz * med / 1e9 - 1.0) > 0.01:
+        notes.append(f"the rate given, {rate_hz:g} Hz, is not the stamps' {1e9 / med:.6g} Hz (median interval): "
+                     "the cluster times and noise values follow the rate given")
     gaps = int(np.count_nonzero(d > 1.5 * med))
     if gaps:
         notes.append(f"{gaps} gap(s) longer than 1.5 sample intervals (longest {d.max() / 1e9:.3g} s): "

@@ -239,7 +239,12 @@ def clean_poses(
         fail(f"{what} is not finite: {_fmt_row(v[i])}", i)
 
     # 2. quaternion norms
-    norm = np.linalg.norm(q, axis=1)
+    with np.errstate(over="ignore"):
+        norm = np.linalg.norm(q, axis=1)
+    big = ~np.isfinite(norm)  # finite components whose squares overflow (1e300): scaled first
+    if big.any():
+        scale = np.max(np.abs(q[big]), axis=1)
+        norm[big] = scale * np.linalg.norm(q[big] / scale[:, None], axis=1)
     small = np.flatnonzero(norm < ZERO_NORM_TOL)
     if small.size:
         fail(f"quaternion has zero norm: {_fmt_row(q[small[0]])}", small[0])

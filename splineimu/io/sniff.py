@@ -74,10 +74,11 @@ def guess_format(path) -> str | None:
         return None
     n = min(len(r) for r in rows)
     integer_stamps = all(r[0].lstrip("+-").isdigit() for r in rows)
-    if "w_RS_S" in header or "a_RS_S" in header:
-        return "euroc_imu"
+    # first: the ground truth's bias columns b_w_RS_S_x, b_a_RS_S_x contain the IMU's names
     if "p_RS_R" in header or "q_RS" in header:
         return "euroc_gt"
+    if "w_RS_S" in header or "a_RS_S" in header:
+        return "euroc_imu"
     if comma and integer_stamps:
         if n == 7:
             return "euroc_imu"
@@ -88,13 +89,14 @@ def guess_format(path) -> str | None:
     return None
 
 
-def format_hint(path, expected: str) -> str | None:
-    """A sentence naming the format ``path`` looks like, if that is not ``expected``; else None."""
+def format_hint(path, expected: str, use: str | None = None) -> str | None:
+    """A sentence naming the format ``path`` looks like, if that is not ``expected``; else None.
+    ``use`` replaces the advice of :data:`FORMATS` (for a command that reads only ``expected``)."""
     fmt = guess_format(path)
     if fmt is None or fmt == expected:
         return None
-    what, use = FORMATS[fmt]
-    return f"the file looks like {what}: {use}"
+    what, advice = FORMATS[fmt]
+    return f"the file looks like {what}: {use or advice}"
 
 
 def _unit_of(magnitude: float, step: float) -> str:
@@ -156,9 +158,9 @@ def check_seconds_magnitude(stamp_text: str, *, path=None, line=None, advice: st
                      + (f"; {advice}" if advice else ""), path=path, line=line)
 
 
-def add_format_hint(exc: InputError, path, expected: str) -> InputError:
+def add_format_hint(exc: InputError, path, expected: str, use: str | None = None) -> InputError:
     """``exc`` with :func:`format_hint`'s sentence appended when the file looks like another format."""
-    hint = format_hint(path, expected)
+    hint = format_hint(path, expected, use)
     if hint is None or hint in exc.problem:
         return exc
     return type(exc)(f"{exc.problem}; {hint}", path=exc.path, line=exc.line, option=exc.option)

@@ -405,7 +405,7 @@ def _line_by_line(rows, n_cols, names, sep, line_numbers, path) -> Table:
         f = _split(row, sep)
         if len(f) < n_cols:
             raise InputError(
-                f"expected {n_cols} columns ({' '.join(names)}), got {len(f)}", path=path, line=ln
+                f"expected {n_cols} columns ({' '.join(names[:n_cols])}), got {len(f)}", path=path, line=ln
             )
         if len(f) > n_cols:
             n_extra += 1
