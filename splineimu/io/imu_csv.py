@@ -38,6 +38,7 @@ import numpy as np
 
 from ..errors import ConfigError, InputError
 from ..validation import as_rate_hz
+from .timestamps import _looks_numeric
 
 __all__ = ["read_imu_csv", "read_imu_table", "read_static_rda", "load_recording", "ImuRecording",
            "GYRO_UNITS", "ACCEL_UNITS", "STANDARD_GRAVITY", "RECORDING_FORMATS"]
@@ -80,14 +81,6 @@ def _check_stamps(t_ns, path, line_of_row):
                          path, line_of_row(i))
 
 
-def _is_number(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
-
-
 def _parse_slow(path):
     """Line-by-line parser: exact messages with line numbers (used when the fast path fails)."""
     t, v, lines = [], [], []
@@ -99,7 +92,7 @@ def _parse_slow(path):
             parts = [p.strip() for p in s.split(",")]
             if len(parts) == 8 and not parts[-1]:  # a trailing comma
                 parts.pop()
-            if not t and len(parts) == 7 and not any(_is_number(p) for p in parts):
+            if not t and len(parts) == 7 and not any(_looks_numeric(p) for p in parts):
                 continue  # a header without '#' (timestamp,wx,wy,...)
             if len(parts) != 7:
                 raise InputError("expected 7 comma-separated fields (t_ns, gyro xyz, accel xyz), "
