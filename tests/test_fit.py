@@ -379,3 +379,13 @@ def test_georeferenced_positions_fit_as_local_ones(kind):
     np.testing.assert_allclose(b.pose(ti)[0] - offset, a.pose(ti)[0], rtol=0, atol=1e-8)
     for x, y in zip(a.imu(ti), b.imu(ti)):
         np.testing.assert_allclose(y, x, rtol=0, atol=1e-6)
+
+
+def test_position_order_2_is_warned_about():
+    """A piecewise-linear position has no acceleration between knots: the accelerometer of such a
+    spline reads gravity alone, which the report says (the command line refuses the order)."""
+    t, p, q = ellipse_poses(100, 1e-3, np.deg2rad(0.1), duration=10.0)
+    _, rep = fit(t, p, q, order=2, knot_spacing_s=0.05, return_report=True)
+    assert "order_too_low" in [w.code for w in rep.warnings]
+    _, rep = fit(t, p, q, order=3, knot_spacing_s=0.05, return_report=True)
+    assert "order_too_low" not in [w.code for w in rep.warnings]

@@ -250,6 +250,9 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
     pred_a = choice["predicted_accel_rms_m_s2"] if choice else None
     warnings = (prediction_warnings(choice, t) + flip_warnings + gap_warnings + warnings + input_warnings(
         t, P, theta, res_pos, res_rot, keep, choice, {"rotation": lay_r[1], "position": lay_p[1]}))
+    if p_order < 3:  # the CLI refuses it; here a spline for poses alone may be what is wanted
+        warnings.append(FitWarning("order_too_low", f"position order {p_order} is piecewise linear: no acceleration "
+                                   "between knots, so the accelerometer reads gravity alone; use order 3 or more"))
     if not conv:
         why = ("; no step lowered the cost any more, as when the knots are too coarse for the turns between them: try "
                "a finer knot spacing" if iters < max_iter else  # Levenberg-Marquardt gave up: more would not help
