@@ -16,7 +16,7 @@ from conftest import require_shared
 
 from splineimu.api import ImuOptions, OutputOptions, SceneInput, SynthesisJob, run_job, synthesize_to_memory
 from splineimu.cli import main
-from splineimu.errors import ConfigError
+from splineimu.errors import ConfigError, InputError
 from splineimu.imu.config import ImuConfig, load_imu_config, load_preset
 from splineimu.imu.ideal import Extrinsic
 from splineimu.imu.noise import SensorModel
@@ -244,7 +244,10 @@ def test_old_layout_is_still_read(tmp_path):
     assert dataset_file(tmp_path, "mav0/imu0/data.csv") == csv and dataset_root(csv) == tmp_path.resolve()
     (tmp_path / "report.json").write_text(json.dumps({"imu": {"sampling": "mean"}}))
     assert recorded_sampling(csv) == "mean"
-    (tmp_path / "report.json").write_text("{")
+    (tmp_path / "report.json").write_text("{")  # broken: refused, no longer taken for point samples
+    with pytest.raises(InputError, match="report.json:1: not valid JSON"):
+        recorded_sampling(csv)
+    (tmp_path / "report.json").unlink()  # missing: point samples
     assert recorded_sampling(csv) == "point"
 
 
