@@ -429,3 +429,14 @@ def test_extra_scene_modules_are_optional_but_not_their_imports(tmp_path, monkey
         SCENES.pop("test-extra", None)
         sys.modules.pop("_extra_scenes_ok", None)
         sys.modules.pop("_extra_scenes_broken", None)
+
+
+def test_parameters_without_finite_motion_are_refused():
+    """A circle at 1e300 m/s overflows: refused naming the scene and its parameters (it reached
+    the table writer as 'Expected finite values, got nan at row 0, column 3', no scene named)."""
+    from splineimu.errors import ConfigError
+
+    sc = make_scene("circle", speed_m_s=1e300)
+    with pytest.raises(ConfigError, match=r"scene 'circle' with .*'speed_m_s': 1e\+300.* no finite motion at t = 0 s"):
+        sc.kinematics([0.0, 1.0])
+    assert np.isfinite(make_scene("circle", speed_m_s=50.0).kinematics([0.0, 1.0]).accel_world).all()

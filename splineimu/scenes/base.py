@@ -281,9 +281,18 @@ class Scene(MotionSource):
         ------
         RangeError
             A time outside ``[t_min_s, t_max_s]``, NaN, or a non-1-D input.
+        ConfigError
+            Parameters whose motion is not finite (``speed_m_s=1e300`` overflows).
         """
         t = self.check_times(t_s)
-        p, v, a, R, w, al = self._evaluate(t)
+        with np.errstate(all="ignore"):
+            p, v, a, R, w, al = self._evaluate(t)
+        if not all(np.isfinite(x).all() for x in (p, v, a, R, w, al)):
+            first = min(int(np.argmin(np.isfinite(np.reshape(x, (t.size, -1))).all(axis=1)))
+                        for x in (p, v, a, R, w, al) if not np.isfinite(x).all())
+            label = type(self).name or type(self).__name__
+            raise ConfigError(f"scene {label!r} with {self.describe()['params']} has no finite motion at t = "
+                              f"{t[first]:g} s: a parameter too large?")
         c = np.ascontiguousarray
         return Kinematics(
             t_s=t,
