@@ -37,7 +37,7 @@ from .. import lie
 from ..errors import InputError, SplineImuError
 from .basis import MAX_ORDER, MIN_ORDER
 from .report import WARN_ACCEL_M_S2, WARN_GYRO_RAD_S, FitWarning
-from .surrogate import band_power, motion_limited
+from .surrogate import band_power, motion_limited, noise_at_spacing
 
 OUTLIER_SIGMAS = 8.0
 OUTLIER_FLOOR_M = 2e-3
@@ -395,9 +395,9 @@ def _diff_noise(X):
     return float(np.linalg.norm(mad / np.sqrt(20.0)))
 
 
-def _top_octave_fraction(t, X, r):
-    """Share of the power of the r-th difference quotient of X in the top octave of the band."""
-    h = float(np.median(np.diff(t)))
+def _top_octave_fraction(h, X, r):
+    """Share of the power of the r-th difference quotient of X (poses ``h`` apart) in the top
+    octave of the band."""
     P = band_power(np.diff(X, r, axis=0) / h**r)
     return float(P[P.size // 2:].sum() / max(P.sum(), 1e-300))
 
@@ -431,7 +431,7 @@ def input_warnings(t, P, theta, res_pos, res_rot, keep, choice=None, spacings=No
         # (acceleration) for knots at the pose spacing h, less by (h / spacing)^(r + 1/2) for
         # coarser ones (ellipse, 100 Hz, 1 mm / 0.1 deg, order 4 at 1-30 ms: 0.5-0.9x measured)
         n = diff_noise[key]
-        est = np.sqrt(2.0 if r == 1 else 6.0) * n / h**r * min(1.0, h / spacings[key]) ** (r + 0.5)
+        est = noise_at_spacing(np.sqrt(2.0 if r == 1 else 6.0) * n / h**r, h, max(spacings[key], h), r)
         lim = WARN_GYRO_RAD_S if r == 1 else WARN_ACCEL_M_S2
         if not limited[key] and est > lim:
             out.append(FitWarning("knots_follow_noise", f"the given {key} knot spacing ({1e3 * spacings[key]:.3g} ms, "
@@ -439,10 +439,10 @@ def input_warnings(t, P, theta, res_pos, res_rot, keep, choice=None, spacings=No
                                   f"differences): the {imu} error from it alone is ~{est:.3g} {unit}/s"
                                   f"{'' if r == 1 else '^2'} (a coarser spacing, or the automatic choice, smooths it)"))
     # the spectra only where the input is motion-limited (the choice has already said so)
-    frac = {key: _top_octave_fraction(t, X, r) for key, X, _, _, r, _ in parts if limited[key]}
+    frac = {key: _top_octave_fraction(h, X, r) for key, X, _, _, r, _ in parts if limited[key]}
     hit = [(key, imu) for key, _, _, _, _, imu in parts if frac.get(key, 0.0) > TOP_OCTAVE_POWER]
     if hit:
-        nyq = 0.5 / float(np.median(np.diff(t)))
+        nyq = 0.5 / h
         what = ", ".join(f"{100 * frac[k]:.2g}% of the {imu} power" for k, imu in hit)
         out.append(FitWarning("input_rate_low", f"the poses hold motion up to their Nyquist frequency "
                               f"({nyq:.3g} Hz; {nyq / 2:.3g}-{nyq:.3g} Hz holds {what}): motion faster than "

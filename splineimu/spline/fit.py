@@ -30,16 +30,18 @@ import numpy as np
 from .. import lie
 from .._kernels import gauss_newton as _gn
 from ..errors import InputError, SplineImuError
-from . import checks
 from .banded import DEFAULT_SMOOTHNESS, layout
 from .checks import (
     check_rotation_steps,
+    check_stamp_clusters,
     classify_residuals,
     dropped_warning,
     input_warnings,
     resolve_setting,
     rotation_flips,
+    singular_message,
     stamp_warnings,
+    validate_poses,
 )
 from .controls import _quat_wxyz
 from .core import KINDS, Spline
@@ -133,7 +135,7 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
         raise SplineImuError(f"smoothness must be finite and >= 0, got {smoothness!r}")
     if not (max_iter >= 1 and max_iter == int(max_iter)):  # 0 returned the initial guess
         raise SplineImuError(f"max_iter must be a positive integer, got {max_iter!r}")
-    t, P, R, w = checks.validate_poses(t_s, positions, quat_xyzw, weights)
+    t, P, R, w = validate_poses(t_s, positions, quat_xyzw, weights)
     for dt in {r_dt, p_dt} - {"auto"}:  # 1e-300 s asked numpy for 1e300 segments (a bare ValueError)
         if t.size > 1 and (t[-1] - t[0]) / dt > 100.0 * t.size:
             raise SplineImuError(f"knot spacing {dt:g} s is too fine: {(t[-1] - t[0]) / dt:.3g} segments for "
@@ -153,7 +155,7 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
     gap_warnings = check_rotation_steps(t, R)
     given = (r_order, r_dt, p_order, p_dt)
     if "auto" in given:
-        checks.check_stamp_clusters(t)
+        check_stamp_clusters(t)
     source = "auto" if isinstance(knot_spacing_s, str) else "given"
 
     def settings(wts, turn=MAX_CONTROL_TURN_RAD):
@@ -330,5 +332,5 @@ def _solve(probs, Rc, kind, max_iter, tick, smoothness):
             res_pos = pos.position_residuals(Pc)
             Rc, res_rot, iters, conv = rot.solve_rotations(Rc, max_iter=max_iter, progress=tick)
     except np.linalg.LinAlgError:
-        raise SplineImuError(checks.singular_message(rot.t, rot.w, min(rot.dt, pos.dt), smoothness)) from None
+        raise SplineImuError(singular_message(rot.t, rot.w, min(rot.dt, pos.dt), smoothness)) from None
     return Rc, Pc, res_pos, res_rot, iters, conv

@@ -118,6 +118,12 @@ def noise_surrogates(windows, k, dt_cv, seed=7, follow=True, also_flat=False):
     return (draw(slope), draw(0.0)) if also_flat else draw(slope)
 
 
+def noise_at_spacing(rms, dt_from, dt_to, r):
+    """The noise part ``rms`` of the r-th derivative's error of a fit at knot spacing ``dt_from``,
+    moved to ``dt_to``: a smoother of bandwidth 1/dt passes noise variance ~dt^-(2r+1)."""
+    return rms * (dt_from / dt_to) ** (r + 0.5)
+
+
 def prediction_at_spacing(c, dt, r):
     """A choice's predicted error of the r-th derivative (``c``: the rotation's or position's entry
     of :func:`splineimu.spline.knots.choose_knot_spacing`) at a finer spacing ``dt`` imposed by
@@ -127,5 +133,5 @@ def prediction_at_spacing(c, dt, r):
     predicted gyro error 0.57 -> 2.5 mrad/s, measured 2.4 (20 Hz: 1.1 -> 5.7, measured 5.8)."""
     if dt >= c["knot_spacing_s"]:
         return c["predicted_rms"]
-    noise = c["predicted_noise_rms"] * (c["knot_spacing_s"] / dt) ** (r + 0.5)
+    noise = noise_at_spacing(c["predicted_noise_rms"], c["knot_spacing_s"], dt, r)
     return float(np.sqrt(noise**2 + max(c["predicted_rms"] ** 2 - c["predicted_noise_rms"] ** 2, 0.0)))
