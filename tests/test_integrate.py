@@ -410,7 +410,9 @@ def test_a_broken_report_json_is_not_taken_for_point_samples(tmp_path):
         dead_reckon(imu, init=gt)
     assert str(e.value).startswith(f"{tmp_path / 'report.json'}:1: not valid JSON (")
     assert "give --sampling point|mean" in str(e.value)
-    assert dead_reckon(imu, init=gt, sampling="mean").sampling == "mean"
+    with pytest.raises(InputError, match="records the IMU clock's offset and drift: repair it, or give --time-offset"):
+        dead_reckon(imu, init=gt, sampling="mean")  # nor for an IMU clock without offset
+    assert dead_reckon(imu, init=gt, sampling="mean", time_offset_s=0, clock_drift_ppm=0).sampling == "mean"
     (tmp_path / "report.json").write_text('{"imu": {"sampling": "mean"}}')
     assert dead_reckon(imu, init=gt).sampling == "mean"
 

@@ -21,6 +21,11 @@ Samples taken with --sampling mean (recorded in the output folder's report.json)
 into point values first, so they integrate as accurately as point samples; --sampling
 overrides what is recorded.
 
+Stamps on an IMU clock with an offset or drift (`splineimu scene --time-offset S
+--clock-drift-ppm PPM`, recorded in report.json as timing.model) are mapped to true time
+before integrating, and the trajectory is written at true time; --time-offset and
+--clock-drift-ppm override what is recorded (0 turns the correction off).
+
 Methods: euler (1st order), midpoint (2nd), rk4 (4th, Munthe-Kaas on SO3). The rotation is
 always advanced with the exact SO3 exponential.
 
@@ -46,6 +51,11 @@ def add_arguments(parser) -> None:
     parser.add_argument("--sampling", choices=("point", "mean"), default=None,
                         help="the samples are values at the stamps, or means over [previous stamp, stamp] "
                              "(default: as recorded in the folder's report.json, else point)")
+    parser.add_argument("--time-offset", type=float, default=None, metavar="S",
+                        help="the IMU clock reads true time + S (default: as recorded in the folder's "
+                             "report.json, else 0)")
+    parser.add_argument("--clock-drift-ppm", type=float, default=None, metavar="PPM",
+                        help="the IMU clock runs fast by PPM parts per million (default: as recorded, else 0)")
     parser.add_argument("-o", "--output", required=True, metavar="TRAJ.tum", help="output TUM file")
     parser.add_argument("--force", action="store_true", help="replace an existing output file")
 
@@ -56,9 +66,11 @@ def run(args) -> int:
 
     check_output_file(args.output, args.force, inputs=[args.imu_csv, args.init])
     res = dead_reckon(args.imu_csv, init=args.init, method=args.method, gravity=args.gravity,
-                      sampling=args.sampling)
+                      sampling=args.sampling, time_offset_s=args.time_offset, clock_drift_ppm=args.clock_drift_ppm)
     for note in res.notes:
         print(f"note: {note}", file=sys.stderr)
+    if res.clock_line:
+        print(res.clock_line)
     if res.skipped_samples:
         print(f"skipping {res.skipped_samples} IMU samples before the ground truth starts")
     out = res.write_tum(args.output)

@@ -114,6 +114,37 @@ class TimingModel:
         """True when no effect is set: the samples lie on the plain grid."""
         return not self.to_dict()
 
+    def true_times_ns(self, stamp_ns) -> np.ndarray:
+        """The true times of stamps written on this clock: the inverse of the clock, for dead reckoning.
+
+        ``t = t_first + (c - offset - t_first) / (1 + drift_ppm * 1e-6)``, with the first stamp
+        standing for ``t_first`` (exact when it is sample 0; else off by ``drift`` times the time
+        before it, 1 ns per 10 ms at 100 ppm). Stamp noise cannot be undone; dropped samples
+        need nothing.
+
+        Parameters
+        ----------
+        stamp_ns : (N,) array_like of int
+            Stamps on the IMU clock [ns], increasing.
+
+        Returns
+        -------
+        (N,) int64
+            True times [ns].
+
+        Examples
+        --------
+        >>> tm = TimingModel(time_offset_s=0.01, clock_drift_ppm=100.0)
+        >>> tm.true_times_ns([10000000, 110000000, 210000000]).tolist()
+        [0, 99990001, 199980002]
+        """
+        stamp = np.asarray(stamp_ns, dtype=np.int64).reshape(-1)
+        offset_ns = int(round(self.time_offset_s * 1e9))
+        if not self.clock_drift_ppm or stamp.size == 0:
+            return stamp - np.int64(offset_ns)
+        rel = (stamp - stamp[0]).astype(np.float64) / (1.0 + self.clock_drift_ppm * 1e-6)
+        return np.int64(int(stamp[0]) - offset_ns) + np.rint(rel).astype(np.int64)
+
     def sample_times(self, first_ns: int, last_ns: int, rate_hz: float, rng=None) -> SampleTimes:
         """True times and written stamps of the samples taken in ``[first_ns, last_ns]`` (true time).
 

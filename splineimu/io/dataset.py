@@ -16,7 +16,8 @@ Folders written before this layout (``OUT/imu0/data.csv`` and
 
 The sampling mode of the data (``point`` or ``mean``) is recorded in ``report.json``
 (``imu.sampling``); :func:`recorded_sampling` reads it back for dead reckoning and
-preintegration. A folder without ``report.json`` holds point samples.
+preintegration. A folder without ``report.json`` holds point samples. The IMU clock's offset
+and drift (``timing.model``) are read back by :func:`recorded_timing`.
 """
 
 from __future__ import annotations
@@ -30,7 +31,7 @@ from .yaml import float_text
 
 __all__ = ["IMU_CSV", "IMU_SENSOR_YAML", "GROUNDTRUTH_CSV", "GROUNDTRUTH_SENSOR_YAML", "BODY_YAML",
            "INCREMENTS_CSV", "VIBRATION_CSV", "dataset_file", "dataset_root", "groundtruth_beside", "recorded_sampling",
-           "sensor_yaml_text", "body_yaml_text"]
+           "recorded_timing", "sensor_yaml_text", "body_yaml_text"]
 
 IMU_CSV = "mav0/imu0/data.csv"
 IMU_SENSOR_YAML = "mav0/imu0/sensor.yaml"
@@ -77,6 +78,24 @@ def groundtruth_beside(imu_csv) -> Path:
     return Path(imu_csv).resolve().parent.parent / "state_groundtruth_estimate0" / "data.csv"
 
 
+def _recorded_report(imu_csv, advice: str):
+    """``(report.json path, its mapping)`` of an IMU csv's output folder; ``(path, None)`` without one."""
+    from ..errors import InputError
+
+    report = dataset_root(imu_csv) / "report.json"
+    try:
+        text = report.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        return report, None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"cannot read ({getattr(exc, 'strerror', None) or exc}); {advice}", path=report) from None
+    try:
+        data = json.loads(text)
+    except ValueError as exc:
+        raise InputError(f"not valid JSON ({exc.msg}); {advice}", path=report, line=exc.lineno) from None
+    return report, data if isinstance(data, dict) else None
+
+
 def recorded_sampling(imu_csv) -> str:
     """The sampling mode recorded with an IMU csv: ``"mean"`` or ``"point"``.
 
@@ -89,22 +108,36 @@ def recorded_sampling(imu_csv) -> str:
         ``report.json`` exists but cannot be read or is not JSON (taking such a folder's mean
         samples for point values costs the ellipse 0.24 m in 10 s, in silence).
     """
+    _, data = _recorded_report(imu_csv, "it records how the samples were taken: repair it, or give "
+                                        "--sampling point|mean")
+    sampling = data.get("imu", {}).get("sampling") if data is not None else None
+    return "mean" if sampling == "mean" else "point"
+
+
+def recorded_timing(imu_csv) -> tuple:
+    """The IMU clock recorded with an IMU csv: ``(timing model mapping, report.json path)``.
+
+    The mapping is ``report.json``'s ``timing.model`` (keys of
+    :class:`splineimu.imu.timing.TimingModel` that were set, e.g. ``time_offset_s``,
+    ``clock_drift_ppm``); empty when the folder has no ``report.json`` or it records no timing.
+
+    Raises
+    ------
+    InputError
+        ``report.json`` exists but cannot be read, is not JSON, or its ``timing.model`` is not
+        a mapping.
+    """
     from ..errors import InputError
 
-    report = dataset_root(imu_csv) / "report.json"
-    advice = "it records how the samples were taken: repair it, or give --sampling point|mean"
-    try:
-        text = report.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        return "point"
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"cannot read ({getattr(exc, 'strerror', None) or exc}); {advice}", path=report) from None
-    try:
-        data = json.loads(text)
-    except ValueError as exc:
-        raise InputError(f"not valid JSON ({exc.msg}); {advice}", path=report, line=exc.lineno) from None
-    sampling = data.get("imu", {}).get("sampling") if isinstance(data, dict) else None
-    return "mean" if sampling == "mean" else "point"
+    report, data = _recorded_report(imu_csv, "it records the IMU clock's offset and drift: repair it, or give "
+                                             "--time-offset and --clock-drift-ppm")
+    timing = data.get("timing") if data is not None else None
+    if timing is None:
+        return {}, report
+    model = timing.get("model") if isinstance(timing, dict) else None
+    if not isinstance(model, dict):
+        raise InputError("`timing.model` is not a mapping; give --time-offset and --clock-drift-ppm", path=report)
+    return dict(model), report
 
 
 def _matrix_block(key: str, T) -> list[str]:
