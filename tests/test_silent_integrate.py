@@ -100,3 +100,26 @@ def test_stamp_noise_is_noted_and_a_bad_record_refused(tmp_path):
         dead_reckon(imu)
     assert str(e.value) == f"{report}: `timing.model.clock_drift_ppm`: `clock_drift_ppm` must be a number, got 'fast'"
     assert dead_reckon(imu, clock_drift_ppm=0.0).clock_drift_ppm == 0.0  # a flag overrides the record
+
+
+def test_a_missing_output_folder_is_created_as_by_the_other_commands(tmp_path, capsys):
+    """`integrate -o new/x.tum` was refused ('output folder does not exist') where scene,
+    from-tum and preintegrate create the folder."""
+    imu = _dataset(tmp_path, "d")
+    out = tmp_path / "new" / "sub" / "dr.tum"
+    assert cli.main(["integrate", str(imu), "-o", str(out)]) == 0
+    assert f"-> {out}" in capsys.readouterr().out
+    lines = out.read_text().splitlines()
+    assert len(lines) == 2002 and lines[1].startswith("0.000000000 ")
+    assert sorted(p.name for p in out.parent.iterdir()) == ["dr.tum"]  # no temporary file left
+    before = out.read_bytes()
+    assert cli.main(["integrate", str(imu), "--method", "euler", "-o", str(out)]) == 1  # no silent overwrite
+    assert capsys.readouterr().err.strip() == f"splineimu integrate: error: output file '{out}' exists; use --force " \
+        "to replace it"
+    assert out.read_bytes() == before
+    assert cli.main(["integrate", str(imu), "--method", "euler", "--force", "-o", str(out)]) == 0
+    assert out.read_bytes() != before
+    (tmp_path / "afile").write_text("")
+    assert cli.main(["integrate", str(imu), "-o", str(tmp_path / "afile" / "x.tum")]) == 1
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "afile" in err and "Traceback" not in err

@@ -15,6 +15,7 @@ from ..errors import ConfigError, InputError
 from ..integrate import METHODS, SAMPLINGS, NavState, Trajectory, integrate
 from ..io.dataset import groundtruth_beside, recorded_sampling, recorded_timing
 from ..io.euroc import read_groundtruth
+from ..io.files import check_output_file
 from ..io.imu_csv import read_imu_csv
 from ..io.tum import write_tum
 from ..motion import DEFAULT_GRAVITY
@@ -85,17 +86,28 @@ class DeadReckoning:
         df.insert(0, "t_ns", self.t_ns)
         return df
 
-    def write_tum(self, path) -> Path:
+    def write_tum(self, path, force: bool = True, inputs=()) -> Path:
         """Write the trajectory as a TUM file (stamps exact from ``t_ns``), atomically.
+
+        Missing parent folders are created (as every command's ``-o`` does).
+
+        Parameters
+        ----------
+        path : path-like
+        force : bool, default True
+            Replace an existing file (the command passes its ``--force``).
+        inputs : sequence of path-like
+            Files that ``path`` may not be (:func:`splineimu.io.files.check_output_file`).
 
         Raises
         ------
+        OutputExistsError
+            ``path`` exists and ``force`` is False.
         ConfigError
-            The output folder does not exist.
+            ``path`` is a folder, a symbolic link or an input.
         """
-        out = Path(path)
-        if not out.resolve().parent.is_dir():
-            raise ConfigError(f"output folder does not exist: {out.resolve().parent}")
+        out = check_output_file(path, force, inputs)
+        out.parent.mkdir(parents=True, exist_ok=True)
         return write_tum(out, self.t_ns, self.trajectory.position_world, self.trajectory.quat_xyzw)
 
 

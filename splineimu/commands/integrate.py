@@ -56,7 +56,8 @@ def add_arguments(parser) -> None:
                              "report.json, else 0)")
     parser.add_argument("--clock-drift-ppm", type=float, default=None, metavar="PPM",
                         help="the IMU clock runs fast by PPM parts per million (default: as recorded, else 0)")
-    parser.add_argument("-o", "--output", required=True, metavar="TRAJ.tum", help="output TUM file")
+    parser.add_argument("-o", "--output", required=True, metavar="TRAJ.tum",
+                        help="output TUM file (missing folders are created)")
     parser.add_argument("--force", action="store_true", help="replace an existing output file")
 
 
@@ -73,7 +74,7 @@ def run(args) -> int:
         print(res.clock_line)
     if res.skipped_samples:
         print(f"skipping {res.skipped_samples} IMU samples before the ground truth starts")
-    out = res.write_tum(args.output)
+    out = res.write_tum(args.output, args.force, inputs=[args.imu_csv, args.init])
     print(f"integrated {len(res.trajectory)} {res.sampling} samples ({res.trajectory.t_s[-1]:.3f} s) with {res.method} "
           f"in {res.integrate_time_s:.3f} s -> {out}")
     if res.final_position_error_m is not None:
