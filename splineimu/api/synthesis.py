@@ -297,6 +297,20 @@ def _stamps(job, first_ns: int, last_ns: int, log, seed=None, write=True):
     return stamps[keep]
 
 
+def _vibration_warnings(job, t_ns, report, log):
+    """Vibration above the Nyquist frequency aliases (as on a sensor without an anti-aliasing
+    filter): kept in the data, told in report.json's warnings and on stderr."""
+    if job.imu.vibration is None:
+        return
+    stamps = np.asarray(getattr(t_ns, "stamp_ns", t_ns))
+    rate = job.imu.rate_hz
+    if job.imu.timestamps is not None:
+        rate = 1e9 / float(np.median(np.diff(stamps))) if stamps.size > 1 else None
+    for w in job.imu.vibration.aliasing_warnings(rate, job.imu.sampling) if rate else []:
+        report.setdefault("warnings", []).append(w)
+        log.note(f"warning: {w['message']}")
+
+
 def _synthesize(job, source, t_ns, seed, out_dir, report, write, result, force=None, fit_data=None):
     from ..pipeline import synthesize_stream
     from .output import write_output
@@ -349,7 +363,9 @@ def synthesize_scene(job: SynthesisJob, *, echo=None, write: bool = True, prepar
         return result
     seed = _seed(job)
     t_ns = _stamps(job, scene.origin_ns, scene.origin_ns + int(round(scene.t_max_s * 1e9)), log, seed, write)
-    _synthesize(job, scene, t_ns, seed, job.output.dir, scene_report(scene, job), write, result)
+    report = scene_report(scene, job)
+    _vibration_warnings(job, t_ns, report, log)
+    _synthesize(job, scene, t_ns, seed, job.output.dir, report, write, result)
     log.line(f"scene         {m.name}, {scene.t_max_s:g} s")
     log.line(imu_line(getattr(t_ns, "stamp_ns", t_ns), job, seed))
     _camera_line(result, log)
@@ -475,6 +491,7 @@ def _one(job, piece, out_dir, gaps, max_gap, write, result, log):
     t_s = (track.t_ns - int(track.t_ns[0])).astype(np.float64) / 1e9
     fit_data = _fit_residuals(spl, t_s, track) if (write and job.output.plot) else None
     report = poses_report(job, track, rep, gaps, max_gap)
+    _vibration_warnings(job, t_ns, report, log)
     _synthesize(job, spl, t_ns, seed, out_dir, report, write, result, force=job.output.force if not quiet else False,
                 fit_data=fit_data)
     if not quiet:

@@ -100,6 +100,54 @@ class VibrationModel:
     def is_empty(self) -> bool:
         return not (self.gyro or self.accel)
 
+    def aliasing_warnings(self, rate_hz: float, sampling: str = "point") -> list:
+        """Warnings for components above the Nyquist frequency ``rate_hz / 2``: they alias.
+
+        An IMU without an anti-aliasing filter shows such vibration at a lower frequency, and so
+        does the synthesized data: this is what the user should be told, not refused. A
+        sinusoid at ``f`` appears at ``|f - rate * round(f / rate)|``; the part of a random band
+        above Nyquist folds into the range given. With ``sampling="mean"`` the interval mean
+        attenuates a sinusoid by ``|sinc(f / rate)|``, which is stated.
+
+        Returns
+        -------
+        list of dict
+            ``{"code": "vibration_aliased", "message": ...}`` (report.json's warning form), one
+            per aliased component.
+
+        Examples
+        --------
+        >>> vib = VibrationModel.from_dict({"gyro": [{"freq_hz": 300.0, "amplitude": [0.1, 0, 0]}]})
+        >>> for part in vib.aliasing_warnings(200.0)[0]["message"].split(": "):
+        ...     print(part)
+        vibration.gyro[0] at 300 Hz is above the Nyquist frequency 100 Hz of the 200 Hz samples
+        it appears aliased at 100 Hz
+        """
+        rate = float(rate_hz)
+        nyq = 0.5 * rate
+        out = []
+        for s in SENSORS:
+            for i, c in enumerate(getattr(self, s)):
+                label = f"vibration.{s}[{i}]"
+                if isinstance(c, Sinusoid):
+                    if c.freq_hz <= nyq:
+                        continue
+                    text = (f"{label} at {c.freq_hz:g} Hz is above the Nyquist frequency {nyq:g} Hz of the "
+                            f"{rate:g} Hz samples: it appears aliased at {_fold(c.freq_hz, rate):g} Hz")
+                    if sampling == "mean":
+                        x = np.pi * c.freq_hz / rate
+                        text += f" (the interval mean leaves {abs(np.sin(x) / x):.3g} of its amplitude)"
+                else:
+                    lo, hi = c.band_hz
+                    if hi <= nyq:
+                        continue
+                    a, b = _fold_band(max(lo, nyq), hi, rate)
+                    text = (f"{label}, band [{lo:g}, {hi:g}] Hz, extends above the Nyquist frequency {nyq:g} Hz "
+                            f"of the {rate:g} Hz samples: its part above {nyq:g} Hz appears aliased in "
+                            f"[{a:g}, {b:g}] Hz")
+                out.append({"code": "vibration_aliased", "message": text})
+        return out
+
     def realize(self, rng=None) -> VibrationRealization:
         """Draw phases (and random-band frequencies) from ``rng``: one realization for a run.
 
@@ -127,6 +175,26 @@ class VibrationModel:
             else:
                 tables.append(None)
         return VibrationRealization(*tables)
+
+
+def _fold(f: float, rate: float) -> float:
+    """The frequency in ``[0, rate / 2]`` at which a tone at ``f`` appears when sampled at ``rate``."""
+    return float(abs(f - rate * np.round(f / rate)))
+
+
+def _fold_band(lo: float, hi: float, rate: float) -> tuple:
+    """The range in ``[0, rate / 2]`` that ``[lo, hi]`` folds into.
+
+    Folding is monotone between multiples of Nyquist and the folded pieces meet at the images
+    of those multiples (0 or Nyquist), so the image is the range spanned by the images of the
+    ends and of the multiples inside.
+    """
+    nyq = 0.5 * rate
+    if hi - lo >= rate:
+        return 0.0, nyq
+    edges = [k * nyq for k in range(int(np.floor(lo / nyq)) + 1, int(np.ceil(hi / nyq)))]
+    images = [_fold(f, rate) for f in (lo, hi, *edges)]
+    return min(images), max(images)
 
 
 def _component(item, doc, keys, label):
