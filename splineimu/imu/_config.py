@@ -124,7 +124,8 @@ class ImuConfig:
         ------
         ConfigError
             Unknown key (with a did-you-mean), non-numeric or non-finite value, negative
-            density, wrong vector length or matrix shape, missing correlation time.
+            density, wrong vector length or matrix shape, missing correlation time; no
+            parameter at all (an empty mapping: the preset ``ideal`` is the noise-free sensor).
         """
         if not isinstance(d, dict):
             raise error(f"expected a mapping of IMU parameters, got {type(d).__name__}", source)
@@ -187,6 +188,12 @@ class ImuConfig:
         if kwargs.get("temperature_reference") is not None:
             vals["temperature_reference"] = finite_number(kwargs["temperature_reference"],
                                                           "temperature_reference", source)
+        if not set(kwargs) - {"update_rate"}:  # `model: {}` would silently be an ideal sensor
+            rate = [k for k in d if k in ("update_rate", "rate_hz")]
+            what = f"only {', '.join(ignored)}, which {'is' if len(ignored) == 1 else 'are'} ignored" if ignored \
+                else "an empty mapping"
+            what = f"only {', '.join(rate + ignored)}" if rate else what
+            raise error(f"holds no IMU parameters ({what}); for a noise-free sensor give the preset `ideal`", source)
         return cls(**vals, source=source, ignored_keys=tuple(ignored))
 
     @classmethod
