@@ -171,6 +171,50 @@ def _truth(truth, folder: Path, sensor: str, t_ns, cal):
     return K, b, note
 
 
+#: The sections of calibration.yaml (io.calibration_yaml) and the sensors of its `calibration` section.
+_SECTIONS = ("imu0", "std", "calibration")
+
+
+def _check_known_keys(target: Path) -> None:
+    """Refuse an existing calibration.yaml with keys the writer does not know: rewriting it dropped
+    the unknown top-level keys (and ``imu0`` / ``std`` keys of the sensor calibrated) in silence,
+    and kept the other unknown ``imu0`` keys, so that the file written no longer loaded as a sensor
+    model. The check names the file, the line and the keys, before any work."""
+    from ..imu._config_values import IGNORED_KEYS, field_names
+    from ..imu.config import ImuConfig
+    from ..io.yaml import read_yaml
+
+    if not target.is_file():
+        return
+    try:
+        doc = read_yaml(target, "calibration file")
+    except ConfigError:
+        return  # not a calibration file: check_calibration_target decided (refused, or replaced with --force)
+    if not isinstance(doc.data, dict):
+        return
+    known = {"std": set(field_names()) | {"rate_hz"} | set(IGNORED_KEYS),
+             "calibration": set(SENSOR_NAMES.values())}
+    unknown = [(k,) for k in doc.data if k not in _SECTIONS]
+    for section, names in known.items():
+        block = doc.data.get(section)
+        unknown += [(section, k) for k in (block if isinstance(block, dict) else ()) if k not in names]
+    if unknown:
+        keys = ", ".join(f"`{'.'.join(map(str, k))}`" for k in unknown)
+        one = len(unknown) == 1
+        raise ConfigError(f"unknown key{'' if one else 's'} {keys}: not part of a calibration file (writing it again "
+                          f"would drop or keep {'it' if one else 'them'} unchecked); remove {'it' if one else 'them'}, "
+                          "or write to another folder", path=target, line=doc.line(*unknown[0]))
+    imu0 = doc.data.get("imu0")
+    if isinstance(imu0, dict) and imu0:
+        try:
+            ImuConfig.from_dict(imu0, source=str(target), base_dir=target.parent)
+        except ConfigError as exc:
+            named = [k for k in imu0 if f"`{k}`" in exc.problem]  # the key the message names, if any
+            line = doc.line("imu0", named[0]) if named else doc.line("imu0")
+            raise ConfigError(f"`imu0`: {exc.problem}; the file must load as a sensor model: repair it, or write to "
+                              "another folder", path=target, line=line) from None
+
+
 def calibrate_file(path, sensor: str, options: CalibrationOptions | None = None, *, gravity_m_s2=None,
                    table_rates_rad_s=None, shared_mount: bool = True, out_dir=None, force: bool = False,
                    truth=None) -> CalibrationRun:
@@ -205,6 +249,10 @@ def calibrate_file(path, sensor: str, options: CalibrationOptions | None = None,
     OutputExistsError
         ``out_dir`` is a file, or its ``calibration.yaml`` already holds this sensor (checked
         before any work) and ``force`` is False.
+    ConfigError
+        An existing ``calibration.yaml`` has keys a calibration file does not have, or an
+        ``imu0`` section that does not load as a sensor model (checked before any work, with
+        ``force`` too: they would be lost or written back unchecked).
     ConfigError, InputError
         Bad options, no table rate for a gyro, unreadable data, too few usable phases.
     """
@@ -217,6 +265,7 @@ def calibrate_file(path, sensor: str, options: CalibrationOptions | None = None,
         target = Path(out_dir) / "calibration.yaml"
         check_output_file(target, True, inputs=[path, truth])  # never a link, a folder or an input
         check_calibration_target(target, [sensor], force)
+        _check_known_keys(target)
     csv = Path(path)
     folder = _data_folder(csv)
     given = gravity_m_s2 is not None if sensor == "accelerometer" else bool(table_rates_rad_s)
