@@ -106,7 +106,7 @@ BAD = [
     ("motion: {scene: ellipse}\noutput:\n  plot: true\n  dir:\n", 4, "`output.dir` is empty"),
     ("motion: [1, 2\n", 2, "invalid YAML"),
     ("motion: {scene: elipse}\noutput: {dir: o}\n", 1, "did you mean 'ellipse'"),
-    ("motion:\n  scene: circle\n  params:\n    radius: 3\noutput: {dir: o}\n", 3, "did you mean 'radius_m'"),
+    ("motion:\n  scene: circle\n  params:\n    radius: 3\noutput: {dir: o}\n", 4, "did you mean 'radius_m'"),
     ("motion:\n  poses: a.tum\n  spline:\n    order: 12\noutput: {dir: o}\n", 4,
      "`motion.spline.order` must be between 2 and 8"),
     ("motion:\n  poses: a.tum\n  gaps: brige\noutput: {dir: o}\n", 3, "did you mean 'bridge'"),

@@ -107,6 +107,33 @@ def _build(cls, doc, section: dict, keys: tuple, fields, extra=None, **kw):
     return cls(**values, **kw, origin=YamlOrigin(doc, place))
 
 
+def _scene_input(doc, motion: dict):
+    """The :class:`SceneInput` of ``motion``, with each parameter's errors at the line of its key.
+
+    The parameters are also checked against the scene's own specification (vector length,
+    sign) here: that check ran only when the scene was made, without the file and line.
+    """
+    from ..scenes import SCENES
+
+    params = motion.get("params")
+    try:
+        source = _build(SceneInput, doc, motion, ("motion",), ("name", "duration_s", "t0_ns", "params"))
+    except ConfigError as exc:
+        named = [k for k in (params if isinstance(params, dict) else ())
+                 if f"`motion.params: {k}`" in exc.problem or f"got {k!r}" in exc.problem]
+        if not named or exc.line != doc.line("motion", "params"):
+            raise
+        raise ConfigError(exc.problem, path=doc.name, line=doc.line("motion", "params", named[0]),
+                          option=f"motion.params.{named[0]}") from None
+    spec = getattr(SCENES[source.name], "PARAMS", {})
+    for k, v in source.params.items():
+        try:
+            spec[k].coerce(source.name, k, v)
+        except ConfigError as exc:
+            raise doc.error(exc.problem, "motion", "params", k) from None
+    return source
+
+
 def load_scene_file(path, run_index: int | None = None) -> SynthesisJob:
     """Read a scene file into a :class:`~splineimu.api.options.SynthesisJob`.
 
@@ -164,7 +191,7 @@ def job_from_document(doc, base) -> SynthesisJob:
         raise ConfigError(what, path=doc.name, line=doc.line("output", "dir") or 1, option="output.dir")
 
     if "scene" in motion:
-        source = _build(SceneInput, doc, motion, ("motion",), ("name", "duration_s", "t0_ns", "params"))
+        source = _scene_input(doc, motion)
     else:
         m = dict(motion)
         rel(m, "poses")
