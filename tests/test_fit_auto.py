@@ -243,6 +243,7 @@ def test_long_rotation_signal_is_summed_per_window(monkeypatch):
     from splineimu.spline import knots
 
     monkeypatch.setattr(knots, "MAX_CV_POSES", 600)
+    monkeypatch.setattr(knots, "MIN_WINDOW_S", 0.1)
     n = 3000
     t = np.arange(n) * 0.005
     inc = np.random.default_rng(1).normal(size=(n - 1, 3))
@@ -440,6 +441,30 @@ def test_slow_motion_gets_knots_beyond_two_seconds():
     fixed = errs(fit(t, p, q, order=5, knot_spacing_s=2.56, reject_outliers=False))
     assert auto[0] <= 0.9 * fixed[0] and auto[1] <= 1.15 * fixed[1], (auto, fixed)
     assert 0.5 <= rep.predicted_gyro_rms_rad_s / auto[0] <= 2.0
+
+
+def test_high_rate_input_is_cross_validated_on_windows_of_seconds():
+    """Long inputs are cross-validated on windows, whose span bounds the spacing at a quarter of
+    it: 4000 poses each were 4 s at 1 kHz and 0.4 s at 10 kHz. Slow turning at 1 kHz (circle,
+    60 s) got 1 s knots, gyro 4.2x the fixed fit at 2.56 s (10 kHz ellipse: 0.1 s, 14x the best
+    fixed setting). Windows now span MIN_WINDOW_S at least (measured: 5.5 s knots, 0.48x)."""
+    from splineimu.spline import knots
+
+    for rate, n, count, span in ((200.0, 720_001, 6, 20.0), (1000.0, 60_001, 1, 60.0), (10_000.0, 1_000_001, 6, 12.0)):
+        t = np.arange(n) / rate
+        wins = knots._windows(t, np.zeros((n, 3)), np.ones(n))
+        assert len(wins) == count and min(wd.t[-1] - wd.t[0] for wd in wins) >= span - 0.01, (rate, len(wins))
+    sc, t, p, R = scene_poses("circle", "white", 60.0, rate_hz=1000.0, seed=1)
+    q = lie.matrix_to_quat_xyzw(R)
+    te = np.arange(1.0, 59.0, 0.005)
+    g0 = sc.imu(te)[0]
+
+    def gyro_err(s):
+        return float(np.sqrt(np.mean(np.sum((s.imu(te)[0] - g0) ** 2, axis=1))))
+
+    spl, rep = fit(t, p, q, return_report=True)
+    fixed = gyro_err(fit(t, p, q, order=4, knot_spacing_s=2.56, reject_outliers=False))
+    assert rep.knot_spacing_s > 2.5 and gyro_err(spl) <= 0.8 * fixed, (rep.knot_spacing_s, gyro_err(spl), fixed)
 
 
 def test_slow_steady_turning_gets_knots_up_to_135_degrees():
