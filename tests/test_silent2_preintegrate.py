@@ -65,12 +65,11 @@ def test_the_command_says_so(tmp_path, capsys):
     text = capsys.readouterr().out
     assert "IMU stamps corrected to true time (as given): clock offset 0.01 s, drift 0 ppm" in text
     assert cli.main(["preintegrate", str(out), "--clock-drift-ppm", "nan"]) == 1
-    assert capsys.readouterr().err == ("splineimu preintegrate: error: `clock_drift_ppm` (--clock-drift-ppm) must be "
-                                       "finite, got nan\n")
+    assert capsys.readouterr().err == "splineimu preintegrate: error: `--clock-drift-ppm` must be finite, got nan\n"
     assert cli.main(["integrate", str(out / "mav0/imu0/data.csv"), "--clock-drift-ppm", "2e5",
                      "-o", str(tmp_path / "x.tum")]) == 1
-    assert capsys.readouterr().err == ("splineimu integrate: error: `clock_drift_ppm` (--clock-drift-ppm) must be "
-                                       "within +-1e5 ppm, got 200000\n")
+    assert capsys.readouterr().err == ("splineimu integrate: error: `--clock-drift-ppm` must be within +-1e5 ppm, "
+                                       "got 200000\n")  # as from-tum says it
 
 
 def test_stamp_noise_is_noted_and_a_bad_record_refused(tmp_path, capsys):
@@ -98,5 +97,4 @@ def test_one_clock_for_both_jobs():
     assert stamp_clock("nowhere.csv", 0, 0) == StampClock()
     with pytest.raises(ConfigError) as e:
         stamp_clock("nowhere.csv", time_offset_s=float("inf"))
-    assert str(e.value) == "`time_offset_s` (--time-offset) must be finite, got inf"
-    assert e.value.option == "--time-offset"
+    assert str(e.value) == "`time_offset_s` must be finite, got inf"  # the command names its flag

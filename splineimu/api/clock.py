@@ -19,10 +19,9 @@ from ..errors import ConfigError, InputError
 from ..io.dataset import recorded_timing
 from ..validation import finite_float
 
-__all__ = ["StampClock", "stamp_clock", "CLOCK_FLAGS"]
+__all__ = ["StampClock", "stamp_clock"]
 
-#: The command-line flag of each argument of :func:`stamp_clock` (integrate, preintegrate).
-CLOCK_FLAGS = {"time_offset_s": "--time-offset", "clock_drift_ppm": "--clock-drift-ppm"}
+_KEYS = ("time_offset_s", "clock_drift_ppm")
 
 
 @dataclass(frozen=True)
@@ -99,8 +98,7 @@ def stamp_clock(imu_csv, time_offset_s: float | None = None, clock_drift_ppm: fl
     Raises
     ------
     ConfigError
-        A given value that is not finite, or a drift of 1e5 ppm or more; the message names the
-        argument and its command-line flag.
+        A given value that is not finite, or a drift of 1e5 ppm or more.
     InputError
         ``report.json`` cannot be read, or records a clock that is not one.
 
@@ -111,20 +109,19 @@ def stamp_clock(imu_csv, time_offset_s: float | None = None, clock_drift_ppm: fl
     >>> stamp_clock("imu.csv", time_offset_s=0, clock_drift_ppm=float("nan"))
     Traceback (most recent call last):
     ...
-    splineimu.errors.ConfigError: `clock_drift_ppm` (--clock-drift-ppm) must be finite, got nan
+    splineimu.errors.ConfigError: `clock_drift_ppm` must be finite, got nan
     """
     from ..imu.timing import TimingModel
 
-    keys = tuple(CLOCK_FLAGS)
-    given = {k: v for k, v in zip(keys, (time_offset_s, clock_drift_ppm)) if v is not None}
-    given = {k: _given_float(v, k) for k, v in given.items()}
+    keys = _KEYS
+    given = {k: finite_float(v, k) for k, v in zip(keys, (time_offset_s, clock_drift_ppm)) if v is not None}
     recorded, report = ({}, None) if len(given) == 2 else recorded_timing(imu_csv)
     values = {k: given.get(k, recorded.get(k, 0.0)) for k in keys}
     try:
         clock = TimingModel(**values)
     except ConfigError as exc:
         if exc.option in given:
-            raise _named(exc, exc.option) from None
+            raise
         raise InputError(f"`timing.model.{exc.option}`: {exc.problem}", path=report) from None
     notes = ()
     noise = recorded.get("stamp_noise_s")
@@ -139,16 +136,3 @@ def stamp_clock(imu_csv, time_offset_s: float | None = None, clock_drift_ppm: fl
         source += " and as given"
     return StampClock(clock.time_offset_s, clock.clock_drift_ppm, source, notes)
 
-
-def _given_float(v, name: str) -> float:
-    try:
-        return finite_float(v, name)
-    except ConfigError as exc:
-        raise _named(exc, name) from None
-
-
-def _named(exc: ConfigError, name: str) -> ConfigError:
-    """``exc`` with the command-line flag beside the argument's name (integrate and preintegrate
-    pass their flags straight through)."""
-    flag = CLOCK_FLAGS[name]
-    return ConfigError(exc.problem.replace(f"`{name}`", f"`{name}` ({flag})", 1), option=flag)

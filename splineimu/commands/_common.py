@@ -89,16 +89,6 @@ def add_imu_args(p: argparse.ArgumentParser):
                         "its contribution is written to mav0/imu0/vibration.csv")
 
 
-def add_clock_args(p: argparse.ArgumentParser, folder: str = "the folder's "):
-    """--time-offset and --clock-drift-ppm of the commands that read a recording against its ground
-    truth (integrate, preintegrate; :func:`splineimu.api.clock.stamp_clock`)."""
-    p.add_argument("--time-offset", type=float, default=None, metavar="S",
-                   help=f"the IMU clock reads true time + S (default: as recorded in {folder}report.json, "
-                        "else 0; 0 turns the correction off)")
-    p.add_argument("--clock-drift-ppm", type=float, default=None, metavar="PPM",
-                   help="the IMU clock runs fast by PPM parts per million (default: as recorded, else 0)")
-
-
 def add_pose_args(p: argparse.ArgumentParser, fmt_help: str):
     p.add_argument("poses", metavar="POSES", help=fmt_help)
     add_imu_args(p)

@@ -39,7 +39,7 @@ Example:
 
 
 def add_arguments(parser) -> None:
-    from ._common import add_clock_args
+    from ._flags import add_clock_args
 
     parser.add_argument("imu_csv", metavar="IMU_CSV", help="EuRoC imu csv (e.g. OUT/mav0/imu0/data.csv)")
     parser.add_argument("--method", choices=("euler", "midpoint", "rk4"), default="rk4",
@@ -62,10 +62,12 @@ def add_arguments(parser) -> None:
 def run(args) -> int:
     from ..api.integrate import dead_reckon
     from ..io.files import check_output_file
+    from ._flags import RECORDING_FLAGS, flag_names
 
     check_output_file(args.output, args.force, inputs=[args.imu_csv, args.init])
-    res = dead_reckon(args.imu_csv, init=args.init, method=args.method, gravity=args.gravity,
-                      sampling=args.sampling, time_offset_s=args.time_offset, clock_drift_ppm=args.clock_drift_ppm)
+    with flag_names(RECORDING_FLAGS):
+        res = dead_reckon(args.imu_csv, init=args.init, method=args.method, gravity=args.gravity,
+                          sampling=args.sampling, time_offset_s=args.time_offset, clock_drift_ppm=args.clock_drift_ppm)
     for note in res.notes:
         print(f"note: {note}", file=sys.stderr)
     if res.clock_line:

@@ -37,7 +37,7 @@ Example:
 """
 
 def add_arguments(parser) -> None:
-    from ._common import add_clock_args
+    from ._flags import add_clock_args
 
     parser.add_argument("out_folder", metavar="OUT_FOLDER",
                         help="folder with mav0/imu0/data.csv and mav0/state_groundtruth_estimate0/data.csv")
@@ -73,6 +73,7 @@ def run(args) -> int:
 
     from ..api.preintegration import evaluate_recording
     from ..io.files import check_output_file, write_output_file
+    from ._flags import RECORDING_FLAGS, flag_names
 
     folder = Path(args.out_folder)
     inputs = [args.imu_csv, args.stamps, args.imu, args.groundtruth, folder / "imu.yaml"]
@@ -80,10 +81,11 @@ def run(args) -> int:
                for sub in ("imu0", "state_groundtruth_estimate0")]
     if args.output:
         check_output_file(args.output, args.force, inputs=inputs)
-    res = evaluate_recording(args.out_folder, imu_csv=args.imu_csv, groundtruth=args.groundtruth,
-                             every=args.every, stamps=args.stamps, imu=args.imu, method=args.method,
-                             covariance=args.covariance, gravity=args.gravity, sampling=args.sampling,
-                             time_offset_s=args.time_offset, clock_drift_ppm=args.clock_drift_ppm)
+    with flag_names(RECORDING_FLAGS):
+        res = evaluate_recording(args.out_folder, imu_csv=args.imu_csv, groundtruth=args.groundtruth,
+                                 every=args.every, stamps=args.stamps, imu=args.imu, method=args.method,
+                                 covariance=args.covariance, gravity=args.gravity, sampling=args.sampling,
+                                 time_offset_s=args.time_offset, clock_drift_ppm=args.clock_drift_ppm)
     df = res.to_dataframe()
     for note in res.notes:
         print(f"note: {note}", file=sys.stderr)
