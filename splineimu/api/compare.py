@@ -1,7 +1,8 @@
 """Comparing trajectories on disk: :func:`compare`, :func:`compare_files`, the job behind ``splineimu compare``.
 
-TUM files are read with evo's own reader (:func:`load_tum`); the metrics are
-:func:`splineimu.metrics.compare` (evo's APE and RPE, see :mod:`splineimu.metrics`).
+TUM files are read with splineimu's TUM reader (:func:`splineimu.io.tum.read_tum`, the one
+every command uses) and handed to evo as trajectory objects (:func:`load_tum`); the metrics
+are :func:`splineimu.metrics.compare` (evo's APE and RPE, see :mod:`splineimu.metrics`).
 """
 
 from __future__ import annotations
@@ -12,7 +13,6 @@ import numpy as np
 
 from ..errors import ConfigError, InputError
 from ..io.files import staged_path
-from ..io.poses import ZERO_NORM_TOL
 from ..io.tum import read_tum
 from ..metrics import CompareResult, _evo, check_compare_options
 from ..metrics import compare as compare_trajectories
@@ -21,40 +21,47 @@ __all__ = ["compare", "compare_files", "plot_compare", "load_tum"]
 
 
 def load_tum(path):
-    """Read a TUM file into an evo ``PoseTrajectory3D`` (evo's own reader).
+    """Read a TUM file into an evo ``PoseTrajectory3D`` with :func:`splineimu.io.tum.read_tum`.
+
+    Every TUM file the other commands read is read: columns separated by spaces, tabs or
+    several of them (evo's own reader refuses all but single spaces), commas, extra columns.
+    The values are evo's: stamps are the decimal text's nearest float (as evo's reader reads
+    them, to the ns), positions as written, quaternions normalized only when their norm is
+    off by more than 4 ulp (evo normalizes when it makes rotation matrices either way).
+
+    Returns
+    -------
+    evo.core.trajectory.PoseTrajectory3D
+        (:func:`compare` passes on the reader's notices, e.g. dropped duplicate rows.)
 
     Raises
     ------
     InputError
-        Missing or malformed file.
+        Missing or malformed file, naming the line (non-finite value, zero quaternion,
+        unsorted or ambiguous repeated stamps, another format).
     """
-    _, _, _, file_interface = _evo()
+    return _read_tum(path)[0]
+
+
+def _read_tum(path):
+    """``(PoseTrajectory3D, notices)`` of a TUM file (:func:`load_tum`)."""
+    _, _, trajectory, _ = _evo()
     p = Path(path)
     if not p.is_file():
         raise InputError("is a folder, expected a TUM file" if p.is_dir() else "no such file", path=p)
-    try:
-        traj = file_interface.read_tum_trajectory_file(str(p))
-    except Exception as exc:
-        from ..io.sniff import add_format_hint
+    from ..io.sniff import format_hint
 
-        _raise_tum_problem(p)  # our reader names an empty file or a bad line; evo's words otherwise
-        raise add_format_hint(InputError(str(exc) or type(exc).__name__, path=p), p, "tum",
-                              use="compare reads TUM trajectories, e.g. OUT/groundtruth.tum") from None
-    q = np.asarray(traj.orientations_quat_wxyz)
-    if not all(np.isfinite(a).all() for a in (traj.timestamps, traj.positions_xyz, q)) or \
-            not (np.linalg.norm(q, axis=1) >= ZERO_NORM_TOL).all():  # evo takes [0, 0, 0, 0] (5.8 deg of APE)
-        read_tum(p, min_poses=1, repeated_stamps="first")  # names the line and the value
-        raise InputError("holds a value that is not a finite number or a zero quaternion", path=p)
-    return traj
+    hint = format_hint(p, "tum", use=_USE)
+    if hint is not None:  # the TUM reader takes a EuRoC csv's first 8 columns (ns stamps as seconds)
+        raise InputError(f"not a TUM trajectory (timestamp tx ty tz qx qy qz qw); {hint}", path=p)
+    track = read_tum(p, min_poses=1, repeated_stamps="first")
+    t_s = np.array([float(f"{'-' if t < 0 else ''}{abs(t) // 10**9}.{abs(t) % 10**9:09d}")
+                    for t in track.t_ns.tolist()], dtype=np.float64)  # as float(text): evo's stamps
+    traj = trajectory.PoseTrajectory3D(np.array(track.positions), track.quat_xyzw[:, [3, 0, 1, 2]], t_s)
+    return traj, [f"{p}: {n}" for n in track.notices]
 
 
-def _raise_tum_problem(path) -> None:
-    """Raise :func:`read_tum`'s InputError (the file, line and columns) for a TUM file evo cannot
-    read; returns when :func:`read_tum` reads it (tabs, extra columns) or it is another format."""
-    from ..io.sniff import guess_format
-
-    if guess_format(path) in (None, "tum"):
-        read_tum(path, min_poses=1, repeated_stamps="first")
+_USE = "compare reads TUM trajectories, e.g. OUT/groundtruth.tum"
 
 
 def compare(est, ref, *, metric: str = "ape", pose_relation: str = "trans", align: str = "none",
@@ -85,9 +92,12 @@ def compare(est, ref, *, metric: str = "ape", pose_relation: str = "trans", alig
     _evo()
     # before any file is read
     check_compare_options(metric, pose_relation, align, delta, delta_unit, t_max_diff, t_offset)
-    est, ref = (load_tum(x) if isinstance(x, (str, Path)) else x for x in (est, ref))
-    return compare_trajectories(est, ref, metric=metric, pose_relation=pose_relation, align=align, delta=delta,
-                                delta_unit=delta_unit, all_pairs=all_pairs, t_max_diff=t_max_diff, t_offset=t_offset)
+    est, ref = (_read_tum(x) if isinstance(x, (str, Path)) else (x, []) for x in (est, ref))
+    (est, est_notices), (ref, ref_notices) = est, ref
+    res = compare_trajectories(est, ref, metric=metric, pose_relation=pose_relation, align=align, delta=delta,
+                               delta_unit=delta_unit, all_pairs=all_pairs, t_max_diff=t_max_diff, t_offset=t_offset)
+    res.notes[:0] = est_notices + ref_notices
+    return res
 
 
 def compare_files(est_path, ref_path, *, plot=None, **options) -> CompareResult:

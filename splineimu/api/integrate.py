@@ -13,13 +13,14 @@ import numpy as np
 
 from ..errors import ConfigError, InputError
 from ..integrate import METHODS, SAMPLINGS, NavState, Trajectory, integrate
-from ..io.dataset import groundtruth_beside, recorded_sampling, recorded_timing
+from ..io.dataset import groundtruth_beside, recorded_sampling
 from ..io.euroc import read_groundtruth
 from ..io.files import check_output_file
 from ..io.imu_csv import read_imu_csv
 from ..io.tum import write_tum
 from ..motion import DEFAULT_GRAVITY
-from ..validation import finite_float, one_of
+from ..validation import one_of
+from .clock import StampClock, stamp_clock
 
 __all__ = ["DeadReckoning", "dead_reckon", "default_groundtruth_path"]
 
@@ -38,10 +39,10 @@ class DeadReckoning:
         offset and drift (the stamps themselves when the clock is not modelled).
     stamp_ns : (N,) int64
         The IMU stamps of the rows as written [ns].
-    time_offset_s, clock_drift_ppm : float
-        The IMU clock the stamps were corrected for (0: none).
-    clock_source : str
-        Where they came from: ``report.json``'s path, ``"given"``, or ``""`` (no correction).
+    clock : splineimu.api.clock.StampClock
+        The IMU clock the stamps were corrected for; its ``time_offset_s``, ``clock_drift_ppm``
+        (0: none) and ``source`` (``report.json``'s path, ``"given"``, ``""``: no correction)
+        are also attributes here (``clock_source``).
     imu_path, groundtruth_path : pathlib.Path
     skipped_samples : int
         IMU samples before the ground truth starts (not integrated).
@@ -63,18 +64,24 @@ class DeadReckoning:
     sampling: str = "point"
     notes: list = field(default_factory=list)
     stamp_ns: np.ndarray | None = None
-    time_offset_s: float = 0.0
-    clock_drift_ppm: float = 0.0
-    clock_source: str = ""
+    clock: StampClock = field(default_factory=StampClock)
+
+    @property
+    def time_offset_s(self) -> float:
+        return self.clock.time_offset_s
+
+    @property
+    def clock_drift_ppm(self) -> float:
+        return self.clock.clock_drift_ppm
+
+    @property
+    def clock_source(self) -> str:
+        return self.clock.source
 
     @property
     def clock_line(self) -> str:
         """One line on the clock correction (``""`` without one), for the command's summary."""
-        if not (self.time_offset_s or self.clock_drift_ppm):
-            return ""
-        where = "as given" if self.clock_source == "given" else f"as recorded in {self.clock_source}"
-        return (f"IMU stamps corrected to true time ({where}): clock offset {self.time_offset_s:g} s, "
-                f"drift {self.clock_drift_ppm:g} ppm")
+        return self.clock.line
 
     @property
     def method(self) -> str:
@@ -142,8 +149,8 @@ def dead_reckon(imu_path, init=None, method: str = "rk4", gravity=DEFAULT_GRAVIT
         The IMU clock: it reads true time + ``time_offset_s``, running fast by
         ``clock_drift_ppm`` (:class:`splineimu.imu.timing.TimingModel`). Each defaults to what
         ``report.json`` of the output folder records (``timing.model``; 0 without one); 0 turns
-        that correction off. The stamps are mapped to true time
-        (:meth:`~splineimu.imu.timing.TimingModel.true_times_ns`) before the initial state is
+        that correction off (:func:`splineimu.api.clock.stamp_clock`). The stamps are mapped to
+        true time (:meth:`~splineimu.imu.timing.TimingModel.true_times_ns`) before the initial state is
         taken and the samples integrated, and the trajectory is written at the true times.
         Left uncorrected, the 12.3 ms offset of ``examples/timing_scene.yaml`` puts the ellipse
         1.19 m off after 10 s.
@@ -182,7 +189,7 @@ def dead_reckon(imu_path, init=None, method: str = "rk4", gravity=DEFAULT_GRAVIT
         what = "is a folder, expected the ground-truth csv" if gt_path.is_dir() else "not found"
         raise ConfigError(f"initial-state file {what}: {gt_path}{hint}")
     one_of(method, "method", METHODS)
-    clock, clock_source, clock_notes = _clock(imu_path, time_offset_s, clock_drift_ppm)
+    clock = stamp_clock(imu_path, time_offset_s, clock_drift_ppm)
     stamp_ns, gyro, accel = read_imu_csv(imu_path)
     t_ns = clock.true_times_ns(stamp_ns)
     gt = read_groundtruth(gt_path)
@@ -203,37 +210,8 @@ def dead_reckon(imu_path, init=None, method: str = "rk4", gravity=DEFAULT_GRAVIT
     if gt.covers(t_ns[-1]):
         err = float(np.linalg.norm(traj.position_world[-1] - gt.state_at(t_ns[-1]).position_world))
     return DeadReckoning(traj, t_ns, imu_path, gt_path, skipped_samples=i0, final_position_error_m=err,
-                         integrate_time_s=elapsed, sampling=sampling, notes=clock_notes + _gap_notes(t_ns),
-                         stamp_ns=stamp_ns[i0:], time_offset_s=clock.time_offset_s,
-                         clock_drift_ppm=clock.clock_drift_ppm,
-                         clock_source=clock_source if not clock.is_identity else "")
-
-
-def _clock(imu_path, time_offset_s, clock_drift_ppm):
-    """``(TimingModel, source, notes)`` of the IMU clock: the given values, else report.json's."""
-    from ..imu.timing import TimingModel
-
-    given = {k: finite_float(v, k) for k, v in (("time_offset_s", time_offset_s),
-                                                  ("clock_drift_ppm", clock_drift_ppm)) if v is not None}
-    recorded, report = ({}, None) if len(given) == 2 else recorded_timing(imu_path)
-    keys = ("time_offset_s", "clock_drift_ppm")
-    values = {k: given.get(k, recorded.get(k, 0.0)) for k in keys}
-    try:
-        clock = TimingModel(**values)
-    except ConfigError as exc:
-        if all(k in given for k in keys) or exc.option in given:
-            raise
-        raise InputError(f"`timing.model.{exc.option}`: {exc.problem}", path=report) from None
-    from_report = any(recorded.get(k) for k in keys if k not in given)
-    source = str(report) if from_report else "given"
-    if from_report and any(given.values()):
-        source += " and as given"
-    notes = []
-    noise = recorded.get("stamp_noise_s")
-    if noise:
-        notes.append(f"the stamps carry white noise of {noise:g} s ({report}): only the clock's offset and "
-                     "drift are undone")
-    return clock, source, notes
+                         integrate_time_s=elapsed, sampling=sampling, notes=list(clock.notes) + _gap_notes(t_ns),
+                         stamp_ns=stamp_ns[i0:], clock=clock)
 
 
 def _gap_notes(t_ns) -> list:

@@ -48,14 +48,16 @@ def run(args) -> int:
     from ..api.allan import allan_output_paths, analyze_recording, write_allan_outputs
     from ..errors import ConfigError
     from ..validation import positive_float
+    from ._flags import flag_names
 
     positive_float(args.points_per_decade, "--points-per-decade")
     if args.plot and not args.output:
         raise ConfigError("--plot needs -o DIR (the plot is written to DIR/allan.png)")
     if args.output:
         allan_output_paths(args.output, args.plot, args.force, inputs=[args.input])  # fail before the analysis
-    analysis = analyze_recording(args.input, args.format, args.rate, args.gyro_unit, args.accel_unit,
-                                 points_per_decade=args.points_per_decade)
+    with flag_names({"rate_hz": "--rate", "fmt": "--format", "gyro_unit": "--gyro-unit", "accel_unit": "--accel-unit"}):
+        analysis = analyze_recording(args.input, args.format, args.rate, args.gyro_unit, args.accel_unit,
+                                     points_per_decade=args.points_per_decade)
     for note in analysis.notes:
         print(f"note: {note}", file=sys.stderr)
     print(analysis.format_table())

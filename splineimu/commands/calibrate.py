@@ -33,6 +33,11 @@ examples:
   splineimu calibrate accel six2/mav0/imu0/data.csv --tilt-sigma-deg 2
 """
 
+#: Library arguments -> flags, for their errors.
+FLAGS = {"tilt_sigma_deg": "--tilt-sigma-deg", "noise_density": "--noise-density", "window_s": "--window",
+         "threshold": "--threshold", "min_dwell_s": "--min-dwell", "random_walk": "--random-walk",
+         "gravity_m_s2": "--gravity-magnitude", "table_rates_rad_s": "--table-rate"}
+
 
 def _common(s):
     s.add_argument("input", metavar="IMU_CSV",
@@ -83,17 +88,19 @@ def run(args) -> int:
     from ..calibration import CalibrationOptions
     from ..errors import ConfigError
     from ._common import say, stderr
+    from ._flags import flag_names
 
     if args.sensor is None:
         raise ConfigError("give the sensor: `splineimu calibrate accel IMU_CSV` or `splineimu calibrate gyro IMU_CSV`")
-    options = CalibrationOptions(tilt_sigma_deg=args.tilt_sigma_deg, noise_density=args.noise_density,
-                                 window_s=args.window, threshold=args.threshold, min_dwell_s=args.min_dwell,
-                                 random_walk=args.random_walk)
     accel = args.sensor == "accel"
-    result = calibrate_file(args.input, args.sensor, options, out_dir=args.out, force=args.force, truth=args.truth,
-                            gravity_m_s2=args.gravity_magnitude if accel else None,
-                            table_rates_rad_s=None if accel else args.table_rate,
-                            shared_mount=accel or not args.separate_mounts)
+    with flag_names(FLAGS):
+        options = CalibrationOptions(tilt_sigma_deg=args.tilt_sigma_deg, noise_density=args.noise_density,
+                                     window_s=args.window, threshold=args.threshold, min_dwell_s=args.min_dwell,
+                                     random_walk=args.random_walk)
+        result = calibrate_file(args.input, args.sensor, options, out_dir=args.out, force=args.force,
+                                truth=args.truth, gravity_m_s2=args.gravity_magnitude if accel else None,
+                                table_rates_rad_s=None if accel else args.table_rate,
+                                shared_mount=accel or not args.separate_mounts)
     say(result.summary())
     for note in result.notes:
         stderr(f"note: {note}")

@@ -20,6 +20,10 @@ Poses are associated by nearest time stamp (--t-max-diff, --t-offset added to ES
 --delta-unit s turns seconds into a whole number of frames (evenly spaced poses only).
 """
 
+#: compare_files' arguments -> flags, for its errors.
+FLAGS = {"t_offset": "--t-offset", "t_max_diff": "--t-max-diff", "delta": "--delta", "delta_unit": "--delta-unit",
+         "metric": "--metric", "pose_relation": "--pose-relation", "align": "--align", "all_pairs": "--all-pairs"}
+
 
 def add_arguments(parser) -> None:
     from ..metrics import ALIGN_MODES, DELTA_UNITS, POSE_RELATIONS
@@ -52,13 +56,15 @@ def add_arguments(parser) -> None:
 def run(args) -> int:
     from ..api.compare import compare_files
     from ..io.files import check_output_file
+    from ._flags import flag_names
 
     if args.plot is not None:
         check_output_file(args.plot, args.force, inputs=[args.est, args.ref], option="--plot")
 
-    res = compare_files(args.est, args.ref, plot=args.plot, metric=args.metric, pose_relation=args.pose_relation,
-                        align=args.align, delta=args.delta, delta_unit=args.delta_unit, all_pairs=args.all_pairs,
-                        t_max_diff=args.t_max_diff, t_offset=args.t_offset)
+    with flag_names(FLAGS):
+        res = compare_files(args.est, args.ref, plot=args.plot, metric=args.metric, pose_relation=args.pose_relation,
+                            align=args.align, delta=args.delta, delta_unit=args.delta_unit, all_pairs=args.all_pairs,
+                            t_max_diff=args.t_max_diff, t_offset=args.t_offset)
     for note in res.notes:
         print(f"note: {note}", file=sys.stderr)
     for r in res.results:

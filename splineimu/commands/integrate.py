@@ -39,6 +39,8 @@ Example:
 
 
 def add_arguments(parser) -> None:
+    from ._flags import add_clock_args
+
     parser.add_argument("imu_csv", metavar="IMU_CSV", help="EuRoC imu csv (e.g. OUT/mav0/imu0/data.csv)")
     parser.add_argument("--method", choices=("euler", "midpoint", "rk4"), default="rk4",
                         help="integration method (default: rk4)")
@@ -51,11 +53,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--sampling", choices=("point", "mean"), default=None,
                         help="the samples are values at the stamps, or means over [previous stamp, stamp] "
                              "(default: as recorded in the folder's report.json, else point)")
-    parser.add_argument("--time-offset", type=float, default=None, metavar="S",
-                        help="the IMU clock reads true time + S (default: as recorded in the folder's "
-                             "report.json, else 0)")
-    parser.add_argument("--clock-drift-ppm", type=float, default=None, metavar="PPM",
-                        help="the IMU clock runs fast by PPM parts per million (default: as recorded, else 0)")
+    add_clock_args(parser)
     parser.add_argument("-o", "--output", required=True, metavar="TRAJ.tum",
                         help="output TUM file (missing folders are created)")
     parser.add_argument("--force", action="store_true", help="replace an existing output file")
@@ -64,10 +62,12 @@ def add_arguments(parser) -> None:
 def run(args) -> int:
     from ..api.integrate import dead_reckon
     from ..io.files import check_output_file
+    from ._flags import RECORDING_FLAGS, flag_names
 
     check_output_file(args.output, args.force, inputs=[args.imu_csv, args.init])
-    res = dead_reckon(args.imu_csv, init=args.init, method=args.method, gravity=args.gravity,
-                      sampling=args.sampling, time_offset_s=args.time_offset, clock_drift_ppm=args.clock_drift_ppm)
+    with flag_names(RECORDING_FLAGS):
+        res = dead_reckon(args.imu_csv, init=args.init, method=args.method, gravity=args.gravity,
+                          sampling=args.sampling, time_offset_s=args.time_offset, clock_drift_ppm=args.clock_drift_ppm)
     for note in res.notes:
         print(f"note: {note}", file=sys.stderr)
     if res.clock_line:

@@ -25,7 +25,11 @@ NEES (their 9x9 covariance is singular); windows of a few samples are dominated 
 midpoint rule's deterministic discretization error in p, which the covariance does not model.
 
 Samples taken with --sampling mean (recorded in OUT/report.json) are turned into point values
-first; --sampling overrides what is recorded. Folders without mav0/ (older layout) are read too.
+first; --sampling overrides what is recorded. Stamps on an IMU clock with an offset or drift
+(`splineimu scene --time-offset S --clock-drift-ppm PPM`, recorded in OUT/report.json as
+timing.model) are mapped to true time before the windows are cut; --time-offset and
+--clock-drift-ppm override what is recorded (0 turns the correction off). Folders without mav0/
+(older layout) are read too.
 
 Example:
   splineimu preintegrate out --every 200
@@ -33,6 +37,8 @@ Example:
 """
 
 def add_arguments(parser) -> None:
+    from ._flags import add_clock_args
+
     parser.add_argument("out_folder", metavar="OUT_FOLDER",
                         help="folder with mav0/imu0/data.csv and mav0/state_groundtruth_estimate0/data.csv")
     win = parser.add_mutually_exclusive_group()
@@ -56,6 +62,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--sampling", choices=("point", "mean"), default=None,
                         help="samples at the stamps, or means over [previous stamp, stamp] "
                              "(default: as recorded in OUT_FOLDER/report.json, else point)")
+    add_clock_args(parser, "OUT_FOLDER/")
     parser.add_argument("--all", action="store_true", help="print every window (default: at most 40)")
     parser.add_argument("-o", "--output", metavar="CSV", default=None, help="also write the table as csv")
     parser.add_argument("--force", action="store_true", help="replace an existing output file")
@@ -66,6 +73,7 @@ def run(args) -> int:
 
     from ..api.preintegration import evaluate_recording
     from ..io.files import check_output_file, write_output_file
+    from ._flags import RECORDING_FLAGS, flag_names
 
     folder = Path(args.out_folder)
     inputs = [args.imu_csv, args.stamps, args.imu, args.groundtruth, folder / "imu.yaml"]
@@ -73,12 +81,16 @@ def run(args) -> int:
                for sub in ("imu0", "state_groundtruth_estimate0")]
     if args.output:
         check_output_file(args.output, args.force, inputs=inputs)
-    res = evaluate_recording(args.out_folder, imu_csv=args.imu_csv, groundtruth=args.groundtruth,
-                             every=args.every, stamps=args.stamps, imu=args.imu, method=args.method,
-                             covariance=args.covariance, gravity=args.gravity, sampling=args.sampling)
+    with flag_names(RECORDING_FLAGS):
+        res = evaluate_recording(args.out_folder, imu_csv=args.imu_csv, groundtruth=args.groundtruth,
+                                 every=args.every, stamps=args.stamps, imu=args.imu, method=args.method,
+                                 covariance=args.covariance, gravity=args.gravity, sampling=args.sampling,
+                                 time_offset_s=args.time_offset, clock_drift_ppm=args.clock_drift_ppm)
     df = res.to_dataframe()
     for note in res.notes:
         print(f"note: {note}", file=sys.stderr)
+    if res.clock_line:
+        print(res.clock_line)
     print(f"{len(df)} windows, {args.method} / {args.covariance}; noise: "
           f"{res.noise_source if res.noise is not None else 'none (no NEES)'}")
     print(res.format_table(limit=None if args.all else 40))
