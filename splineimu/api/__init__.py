@@ -11,7 +11,8 @@ Build a :class:`SynthesisJob` (in Python, from command-line flags, or from a sce
     arrays = synthesize_to_memory(job).synthesis   # or keep the data in memory
 
 The jobs that read or write files are here too: :func:`analyze_recording` (``splineimu allan``),
-:func:`calibrate_file`, :func:`dead_reckon`, :func:`evaluate_recording`, :func:`compare_files`.
+:func:`calibrate_file`, :func:`dead_reckon`, :func:`evaluate_recording`, :func:`compare_files`,
+with their result objects, and :func:`stamp_clock` (the IMU clock a recording was stamped on).
 
 Names are imported lazily (``import splineimu.api`` does not import numpy).
 """
@@ -28,9 +29,10 @@ _NAMES = {
     "batch": ("run_batch", "BatchResult"),
     "calibration": ("calibrate_file", "CalibrationRun"),
     "integrate": ("dead_reckon", "DeadReckoning"),
-    "preintegration": ("evaluate_recording",),
+    "preintegration": ("evaluate_recording", "RecordingWindows"),
+    "clock": ("stamp_clock", "StampClock"),
     "compare": ("compare_files", "plot_compare"),
-    "allan": ("analyze_recording", "allan_output_paths", "write_allan_outputs", "plot_allan"),
+    "allan": ("analyze_recording", "AllanAnalysis", "allan_output_paths", "write_allan_outputs", "plot_allan"),
 }
 _WHERE = {name: mod for mod, names in _NAMES.items() for name in names}
 
