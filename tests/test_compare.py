@@ -313,16 +313,20 @@ def test_plot_is_written_in_the_format_its_name_gives(tmp_path):
 
 
 def test_few_associated_poses_are_noted(tmp_path, capsys):
-    """An estimate stamped in nanoseconds against a reference in seconds associated 1 of 399
-    poses (stamp 0) and printed that one pair's APE as the result, without a word."""
+    """An estimate stamped in milliseconds against a reference in seconds associated 1 of 399
+    poses (stamp 0) and printed that one pair's APE as the result, without a word. (Integer
+    nanoseconds counted from 0, the first case of this, are now refused by the TUM reader.)"""
     ref = tmp_path / "ref.tum"
     est = tmp_path / "est.tum"
     ref.write_text("".join(f"{i * 0.005:.3f} {i * 0.01} 0 0 0 0 0 1\n" for i in range(399)))
     est.write_text("".join(f"{i * 5_000_000} {i * 0.01 + 0.5} 0 0 0 0 0 1\n" for i in range(399)))  # 0.5 m off
+    with pytest.raises(InputError, match=r"est\.tum:1: integer stamps step by 5000000 .* look like nanoseconds"):
+        compare_files(est, ref)
+    est.write_text("".join(f"{i * 5}.000 {i * 0.01 + 0.5} 0 0 0 0 0 1\n" for i in range(399)))  # ms, 0.5 m off
     r = compare_files(est, ref)
     assert r.n_associated == 1 and r.ape.stats["rmse"] == 0.5
     assert r.notes == ["only 1 of 399 estimated and 399 reference poses were associated: the stamps span "
-                       "[0, 1.99e+09] s (estimate) and [0, 1.99] s (reference); check their units and --t-max-diff"]
+                       "[0, 1990] s (estimate) and [0, 1.99] s (reference); check their units and --t-max-diff"]
     assert cli.main(["compare", str(est), str(ref)]) == 0
     assert capsys.readouterr().err.startswith("note: only 1 of 399 estimated")
     assert compare_files(ref, ref).notes == []

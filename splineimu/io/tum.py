@@ -30,8 +30,9 @@ def read_tum(path, min_poses: int = 2, repeated_stamps: str = "error") -> PoseTr
     path : str or os.PathLike
         Text file with lines ``t x y z qx qy qz qw``, separated by whitespace (or by
         commas, if the first data line has one). Blank lines and lines starting with
-        ``#`` are skipped. Columns after the 8th are ignored with one notice (OpenVINS's
-        ``udel_gore.txt`` has 6 covariance columns).
+        ``#`` are skipped, and so is a first line without numbers (a header). Columns
+        after the 8th are ignored with one notice (OpenVINS's ``udel_gore.txt`` has 6
+        covariance columns).
     min_poses : int, default 2
         Fewest poses accepted.
     repeated_stamps : {"error", "first"}, default "error"
@@ -48,7 +49,11 @@ def read_tum(path, min_poses: int = 2, repeated_stamps: str = "error") -> PoseTr
     InputError
         Missing file, fewer than 8 columns, a non-numeric or non-finite value, a zero
         quaternion, unsorted stamps, an ambiguous repeated stamp, or too few poses; the
-        message is ``"file:line: problem"``.
+        message is ``"file:line: problem"``. Before any line is read as a pose: a file that
+        looks like a EuRoC ground-truth or IMU csv or a KITTI pose file, or whose header
+        names the quaternion in another order than ``qx qy qz qw``
+        (:func:`splineimu.io.sniff.check_tum_layout`). Stamps that are not seconds: beyond
+        the year 5000, or integers stepping by 1000 s or more (ns or us counted from 0).
 
     Notes
     -----
@@ -71,12 +76,14 @@ def read_tum(path, min_poses: int = 2, repeated_stamps: str = "error") -> PoseTr
     ([1305031102175304000, 1305031102185304000], [2, 3])
     """
     from ..errors import InputError
-    from .sniff import add_format_hint, check_seconds_magnitude
+    from .sniff import add_format_hint, check_integer_seconds_step, check_seconds_magnitude, check_tum_layout
 
+    has_header = check_tum_layout(path)  # EuRoC, KITTI, a header with qw first: refused before reading
     try:
-        table = read_table(path, n_cols=8, column_names=TUM_COLUMNS, sep="auto")
-        check_seconds_magnitude(table.stamps[0], path=path, line=int(table.line_numbers[0]),
-                                advice="TUM stamps are decimal seconds: convert the column")
+        table = read_table(path, n_cols=8, column_names=TUM_COLUMNS, sep="auto", allow_header=has_header)
+        convert = "TUM stamps are decimal seconds: convert the column"
+        check_seconds_magnitude(table.stamps[0], path=path, line=int(table.line_numbers[0]), advice=convert)
+        check_integer_seconds_step(table.stamps, path=path, line=int(table.line_numbers[0]), advice=convert)
         return track_from_table(table, "s", table.values[:, 3:7], path=path, min_poses=min_poses,
                                 repeated_stamps=repeated_stamps)
     except InputError as exc:
