@@ -39,3 +39,21 @@ def test_scene_t0_in_range_is_the_origin(tmp_path):
                      str(tum)]) == 0
     assert [ln.split()[0] for ln in tum.read_text().splitlines()[1:]] == ["1.500000000", "2.000000000",
                                                                          "2.500000000"]
+
+
+def test_scene_file_t0_out_of_range_names_file_line_and_key(tmp_path, capsys):
+    """A scene file's t0_ns: -1 was refused without its file or line, when the scene was made."""
+    p = tmp_path / "s.yaml"
+    p.write_text(f"motion:\n  scene: static\n  duration_s: 1\n  t0_ns: -1\noutput:\n  dir: {tmp_path / 'out'}\n")
+    err = _error(capsys, ["run", str(p)])
+    assert err == f"splineimu run: error: {p}:4: `motion.t0_ns` must be between 0 and {2**62 - 1}, got -1"
+    assert not (tmp_path / "out").exists()
+
+
+def test_scene_input_refuses_t0_out_of_the_scenes_range():
+    from splineimu.api import SceneInput
+    from splineimu.errors import ConfigError
+
+    with pytest.raises(ConfigError, match=rf"^`t0_ns` must be between 0 and {2**62 - 1}, got -1$"):
+        SceneInput("static", t0_ns=-1)
+    assert SceneInput("static", t0_ns=2**62 - 1).t0_ns == 2**62 - 1

@@ -418,7 +418,7 @@ class SceneInput(_Checked):
             name, kw = self._kw("duration_s")
             self.duration_s = positive_float(self.duration_s, name, **kw)
         name, kw = self._kw("t0_ns")
-        self.t0_ns = int_in_range(self.t0_ns, name, -(2**63), 2**63 - 1, **kw)
+        self.t0_ns = int_in_range(self.t0_ns, name, 0, 2**62 - 1, **kw)  # the scenes' range (scenes.base._origin_ns)
         if not isinstance(self.params, dict):
             raise self._err("params", f"must be a mapping, got {type(self.params).__name__}")
         known = list(getattr(SCENES[self.name], "PARAMS", {}))

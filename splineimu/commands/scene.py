@@ -16,9 +16,6 @@ examples:
   splineimu scene --list                              scenes and their parameters
 """
 
-#: Scene arguments -> flags, for the errors of the scene itself (``make_scene``).
-SCENE_FLAGS = {"t0_ns": "--t0-ns", "duration_s": "--duration"}
-
 
 def add_arguments(p):
     from ._common import add_imu_args, add_output_args
@@ -37,7 +34,6 @@ def add_arguments(p):
 def run(args) -> int:
     from ..errors import ConfigError
     from ._common import echo, options_from_args, run_synthesis
-    from ._flags import flag_names
 
     if args.list:
         from .. import scenes
@@ -54,5 +50,4 @@ def run(args) -> int:
     job = options_from_args(args, "scene")  # first: a misspelt scene or flag is the error to name
     if not args.out and not args.tum:
         raise ConfigError("nothing to write: give -o OUT and/or --tum FILE")
-    with flag_names(SCENE_FLAGS):  # the scene checks its arguments under their library names
-        return run_synthesis(job)
+    return run_synthesis(job)
