@@ -42,7 +42,7 @@ def test_surrogate_power_around_the_cut_off(kind, below, dt):
     noise = _noise(kind, t.size, np.random.default_rng(3))
     windows = knots._windows(t, np.ascontiguousarray(motion + noise), np.ones(t.size))
     first = sur.noise_spectrum(windows[0], 4, dt, np.random.default_rng(7))[1]
-    surrogate = sur.noise_surrogates(windows, 4, dt)[0]
+    surrogate = sur.noise_surrogates(windows, 4, dt)[0][0]
     f = np.fft.rfftfreq(t.size, 1.0 / RATE_HZ)
     fc = first / (t[-1] - t[0])
     above = _band_power(surrogate, f, fc, 2 * fc) / _band_power(noise, f, fc, 2 * fc)

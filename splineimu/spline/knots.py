@@ -36,7 +36,14 @@ Method
 3. **The derivative's error on a ladder** of spacings (steps of 1.25x around the value-optimal
    one, per order): signal and surrogate are fitted together; the noise part is the surrogate
    fit's derivative, the bias part the change of the signal fit's derivative from the rung
-   below less the surrogate's change. While the smallest error sits at an end of the ladder
+   below less the surrogate's change. That change lags the bias: a bias growing as dt^p
+   changes by (1 - 1.25^-p) of itself from the rung below (0.65-0.75 measured for the gyro on
+   the ellipse, six-position and rate-table scenes), and the gyro's choice landed a rung too
+   coarse (1.16-1.28x the best fixed setting). Where the noise is white (its spectrum over the
+   octave above the cut-off flatter than f^-1: the surrogate is exact there) the gyro's bias^2
+   is doubled (:data:`WHITE_BIAS_LAG`); coloured noise keeps the change as it is (the
+   surrogate's misfit is in it too: doubled, BROAD 32 and 35 synthesized more gyro above 15 Hz
+   than their real IMU measured). While the smallest error sits at an end of the ladder
    and the error falls over the two rungs before it, the ladder is walked on past that end,
    toward coarser spacings (the rotation up to its turn limit, step 5; the position up to
    :data:`WALK_MAX_S`: the hand-held accelerometer's optimum is 2-3x the value-optimal
@@ -73,7 +80,11 @@ cross-validated and 35 ladder fits per choice. The grid is scored coarse to fine
 before its finest spacings (the costliest fits, more control points than poses) once two in a
 row score worse than their coarser neighbour and 3x the best. Inputs longer than
 :data:`MAX_CV_POSES` are cross-validated on evenly spread windows (the spacing is a local
-property), so the choice costs the same for a minute and for an hour. Measured (12k poses,
+property), so the choice costs the same for a minute and for an hour; each window spans
+:data:`MIN_WINDOW_S` at least, so above 333 Hz the windows hold more poses (10 kHz: 120 000
+a window, 30x those at 200 Hz; 20 s of ellipse at 10 kHz, one window: the fit took 3.9 s CPU
+against 1.2 s with 0.4 s windows, gyro / accel 1.05x / 1.03x the best fixed setting against
+14x / 10x). Measured (12k poses,
 benchmarks/bench_knots.py): ~1.75x scipy's interpolation of the same poses (load ~1); the
 kernels sum in the order of the fitting kernels and of numpy, so the choices are those of the
 implementation they replaced (its reported figures to 1e-13 on noisy and real poses, to
@@ -116,6 +127,11 @@ MAX_CV_POSES = 24_000
 _N_WINDOWS = 6
 #: The least span of a cross-validated window [s] (:func:`_windows`).
 MIN_WINDOW_S = 12.0
+#: Pose noise whose spectrum over the octave above the cut-off is flatter than f^WHITE_SLOPE
+#: counts as white; the gyro's bias estimate (the change from the rung below) is then multiplied
+#: by WHITE_BIAS_LAG (method, step 3).
+WHITE_SLOPE = -1.0
+WHITE_BIAS_LAG = 2.0
 #: Coarse step of the spacing grid, and how much better (relatively) a lower order must score
 #: in the first cross-validation pass.
 _STEP = 1.6
@@ -312,13 +328,14 @@ def _best(table, orders):
     return k_best, best[k_best][1], best
 
 
-def _ladder_errors(windows, k, ladder, noises, r):
+def _ladder_errors(windows, k, ladder, noises, r, lag=1.0):
     """Predicted r-th derivative error at the spacings ``ladder[1:]`` of a geometric ladder.
 
     Each rung fits the signal and the noise surrogate together (one system, six columns): the
     noise part is the surrogate fit's derivative; the bias part is the change of the signal
-    fit's derivative from the rung below, less that of the surrogate fit's. Returns (noise
-    variance, bias^2, per-window noise profiles) for each rung above the first.
+    fit's derivative from the rung below, less that of the surrogate fit's, times ``lag`` (see
+    :data:`WHITE_BIAS_LAG`). Returns (noise variance, bias^2, per-window noise profiles) for
+    each rung above the first.
     """
     var = np.zeros(len(ladder))
     bias2 = np.zeros(len(ladder))
@@ -343,18 +360,18 @@ def _ladder_errors(windows, k, ladder, noises, r):
             prev[i] = ds
             e_list.append((wd.t, e2))
         var[j] = var[j] / max(nsc, 1) if np.isfinite(var[j]) else np.inf
-        bias2[j] = max(change / max(nsc, 1), 0.0) if np.isfinite(change) else np.inf
+        bias2[j] = lag * max(change / max(nsc, 1), 0.0) if np.isfinite(change) else np.inf
         ends.append(e_list)
     return var[1:], bias2[1:], ends[1:]
 
 
-def _walk_ladder(windows, k, ladder, noises, r, lo, hi):
+def _walk_ladder(windows, k, ladder, noises, r, lo, hi, lag=1.0):
     """:func:`_ladder_errors` on ``ladder``, walked on two rungs at a time past whichever end
     holds the smallest predicted error while the error falls toward it (at most
     :data:`_WALK_RUNGS` rungs each way, within [lo, hi]): the derivative's optimum can lie
     several rungs from the value-optimal spacing the ladder is centred on. Returns the ladder
     and the errors of its rungs above the first."""
-    var, bias2, ends = _ladder_errors(windows, k, ladder, noises, r)
+    var, bias2, ends = _ladder_errors(windows, k, ladder, noises, r, lag)
     up = down = 0
     while var.size >= 3:
         e = var + bias2
@@ -371,7 +388,7 @@ def _walk_ladder(windows, k, ladder, noises, r, lo, hi):
             break
         if more.size < 2:
             break
-        v, b, en = _ladder_errors(windows, k, more, noises, r)
+        v, b, en = _ladder_errors(windows, k, more, noises, r, lag)
         if j == var.size - 1:
             up += v.size
             ladder, var, bias2, ends = np.r_[ladder, more[1:]], np.r_[var, v], np.r_[bias2, b], ends + en
@@ -430,8 +447,9 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
     follow = not limited
     k_s, dt_s = (k0, dt0) if follow and dt0 > dt_cvb else (k_cv, dt_cvb)
     want_flat = r == 1 and follow  # the rotation's value error (below) takes the flat continuation
-    drawn = noise_surrogates(windows, k_s, dt_s, follow=follow, also_flat=want_flat)
-    noises, flat = drawn if want_flat else (drawn, None)
+    noises, flat, slope = noise_surrogates(windows, k_s, dt_s, follow=follow, also_flat=want_flat)
+    # the gyro's bias estimate lags; for white noise it is corrected (WHITE_BIAS_LAG)
+    bias_lag = WHITE_BIAS_LAG if r == 1 and slope > WHITE_SLOPE else 1.0
     if limited:
         # the residual is mostly motion the fit missed, not noise: look at finer spacings
         noises = [0.1 * nz for nz in noises]
@@ -464,9 +482,9 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
         ladder = np.r_[ladder[first], ladder[first + 1:][ok[first + 1:]]]
         if dt_fixed is None:
             top = ladder[-1] if limited else max(ladder[-1], min(hi, walk_cap))
-            ladder, var, bias2, ends = _walk_ladder(windows, k, ladder, noises, r, lo_k, top)
+            ladder, var, bias2, ends = _walk_ladder(windows, k, ladder, noises, r, lo_k, top, bias_lag)
         else:
-            var, bias2, ends = _ladder_errors(windows, k, ladder, noises, r)
+            var, bias2, ends = _ladder_errors(windows, k, ladder, noises, r, bias_lag)
         ladders[k] = ladder
         consider(k, ladder[1:], var, bias2, ends, dt_cv)
     if best is None:
@@ -476,7 +494,7 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
         # below): near a steep rise of the bias the error changes by 20-30% per rung
         k, dt, dt_cv = best[1], best[2], best[5]
         half = dt * _LADDER ** np.array([-1.5, -0.5, 0.5])
-        var, bias2, ends = _ladder_errors(windows, k, half, noises, r)
+        var, bias2, ends = _ladder_errors(windows, k, half, noises, r, bias_lag)
         inside = (half[1:] >= ladders[k][1] * 0.999) & (half[1:] <= ladders[k][-1] * 1.001)
         consider(k, half[1:][inside], var[inside], bias2[inside], [e for e, i in zip(ends, inside) if i], dt_cv)
     pred, k, dt, var, ends, dt_cv = best
@@ -489,6 +507,7 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
     out = {
         "order": k, "knot_spacing_s": dt, "cv_knot_spacing_s": dt_cv,
         "block_poses": int(block), "noise_correlation_poses": int(lag), "motion_limited": bool(limited),
+        "noise_slope": float(slope) if np.isfinite(slope) else None, "bias_correction": bias_lag,
         "predicted_rms": pred, "predicted_noise_rms": float(np.sqrt(var)),
         "cv_rms": float(np.sqrt(table[(k, dt_cv)])), "end_zone_s": float(zone), "end_predicted_rms": end_rms,
         "candidates": rows,

@@ -96,11 +96,14 @@ def noise_surrogates(windows, k, dt_cv, seed=7, follow=True, also_flat=False):
     AR(1) and upsampled noise are flat or nearly so above the cut-off and stay flat; noise
     rolling off above its own corner (mocap filters) keeps rising below it, but not faster than
     f^-2 (BROAD orientation against the real gyro: f^-2 from 12 to 40 Hz, f^-3.8 above 31 Hz).
-    With ``also_flat``, ``(series, flat series)``: the same spectra and phases continued flat."""
+    Returns ``(series, flat series or None, slope)``: with ``also_flat`` the same spectra and
+    phases continued flat; ``slope`` the median of the windows' slopes as read (NaN: none read),
+    before the clip."""
     rngs = [np.random.default_rng(seed) for _ in windows]
     spectra = [noise_spectrum(wd, k, dt_cv, rng) for wd, rng in zip(windows, rngs)]
     slopes = [sl for _, first, sl, _ in spectra if first is not None and np.isfinite(sl)]
-    slope = float(np.clip(np.median(slopes), _MIN_NOISE_SLOPE, 0.0)) if slopes and follow else 0.0
+    read = float(np.median(slopes)) if slopes else np.nan
+    slope = float(np.clip(read, _MIN_NOISE_SLOPE, 0.0)) if slopes and follow else 0.0
 
     def draw(slope):
         out = []
@@ -115,7 +118,7 @@ def noise_surrogates(windows, k, dt_cv, seed=7, follow=True, also_flat=False):
             out.append(np.fft.irfft(np.sqrt(P) * phase, wd.X.shape[0], axis=0))
         return out
 
-    return (draw(slope), draw(0.0)) if also_flat else draw(slope)
+    return draw(slope), (draw(0.0) if also_flat else None), read
 
 
 def noise_at_spacing(rms, dt_from, dt_to, r):
