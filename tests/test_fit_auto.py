@@ -240,22 +240,22 @@ def test_long_rotation_signal_is_summed_per_window(monkeypatch):
     """Inputs longer than the cross-validated length are windowed; each window's rotation
     signal is the sum of its own increments from zero, not a stretch of a sum over all poses
     (whose rounding grows with the turn accumulated before it)."""
-    from splineimu.spline import knots
+    from splineimu.spline import crossval
 
-    monkeypatch.setattr(knots, "MAX_CV_POSES", 600)
-    monkeypatch.setattr(knots, "MIN_WINDOW_S", 0.1)
+    monkeypatch.setattr(crossval, "MAX_CV_POSES", 600)
+    monkeypatch.setattr(crossval, "MIN_WINDOW_S", 0.1)
     n = 3000
     t = np.arange(n) * 0.005
     inc = np.random.default_rng(1).normal(size=(n - 1, 3))
     inc[:, 2] += 100.0  # 1e4 rad of accumulated turn a minute
-    wins = knots._windows(t, inc, np.ones(n), increments=True)
-    assert len(wins) == knots._N_WINDOWS
+    wins = crossval._windows(t, inc, np.ones(n), increments=True)
+    assert len(wins) == crossval._N_WINDOWS
     last = wins[-1]
     a = n - last.t.size
     assert last.X[0].tolist() == [0.0, 0.0, 0.0]
     np.testing.assert_array_equal(last.X[1], inc[a])
     np.testing.assert_allclose(last.X[-1], inc[a:].sum(axis=0), rtol=1e-13)
-    whole = knots._windows(t[:500], inc[:499], np.ones(500), increments=True)
+    whole = crossval._windows(t[:500], inc[:499], np.ones(500), increments=True)
     assert len(whole) == 1
     np.testing.assert_array_equal(whole[0].X, np.vstack([np.zeros(3), np.cumsum(inc[:499], axis=0)]))
 
@@ -448,11 +448,11 @@ def test_high_rate_input_is_cross_validated_on_windows_of_seconds():
     it: 4000 poses each were 4 s at 1 kHz and 0.4 s at 10 kHz. Slow turning at 1 kHz (circle,
     60 s) got 1 s knots, gyro 4.2x the fixed fit at 2.56 s (10 kHz ellipse: 0.1 s, 14x the best
     fixed setting). Windows now span MIN_WINDOW_S at least (measured: 5.5 s knots, 0.48x)."""
-    from splineimu.spline import knots
+    from splineimu.spline import crossval
 
     for rate, n, count, span in ((200.0, 720_001, 6, 20.0), (1000.0, 60_001, 1, 60.0), (10_000.0, 1_000_001, 6, 12.0)):
         t = np.arange(n) / rate
-        wins = knots._windows(t, np.zeros((n, 3)), np.ones(n))
+        wins = crossval._windows(t, np.zeros((n, 3)), np.ones(n))
         assert len(wins) == count and min(wd.t[-1] - wd.t[0] for wd in wins) >= span - 0.01, (rate, len(wins))
     sc, t, p, R = scene_poses("circle", "white", 60.0, rate_hz=1000.0, seed=1)
     q = lie.matrix_to_quat_xyzw(R)

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from splineimu._kernels import cv as kcv
-from splineimu.spline import knots
+from splineimu.spline import crossval
 from splineimu.spline.banded import (
     DEFAULT_SMOOTHNESS,
     SPARSE_SMOOTHNESS,
@@ -56,7 +56,7 @@ def test_fold_fits_and_held_out_error_match_a_dense_reference(k, dt, block):
     X = np.c_[np.sin(3 * t), np.cos(2 * t), t**2] + 1e-3 * rng.normal(size=(t.size, 3))
     w = np.ones(t.size)
     w[150:190] = 0.0  # a gap: training-free segments get the sparse penalty
-    wd = knots._Window(t, X, w)
+    wd = crossval._Window(t, X, w)
     fold = wd.folds(block)
     C, s, seg, B, nseg, dt_, sizes = wd.fit_folds(k, dt, fold, 4)
     C_ref, _, seg_ref, B_ref, _ = _reference_fold_fits(t, w, fold, X, k, dt)
@@ -77,7 +77,7 @@ def test_derivative_matches_the_basis_derivative(r):
     k, dt = 5, 0.07
     t = np.linspace(0.0, 2.0, 301)
     X = np.c_[np.sin(t), t**3, np.exp(-t)]
-    wd = knots._Window(t, X, np.ones(t.size))
+    wd = crossval._Window(t, X, np.ones(t.size))
     d = wd.derivative(k, dt, wd.zero, 1, r)[0]
     C, s, seg, _, _, dt_, _ = wd.fit_folds(k, dt, wd.zero, 1)
     Br = basis_values(k, s - seg, derivative=r) / dt_**r
@@ -127,7 +127,7 @@ def test_solve_folds_is_the_stepwise_solve_bitwise(seed):
     H[:, rng.integers(0, n, size=max(1, n // 3)), :] = 0.0  # rows without samples
     rhs = rng.normal(size=(nf, n, d))
     counts = (rng.random((nf, nseg)) < 0.6) * rng.integers(1, 4, size=(nf, nseg)).astype(float)
-    pen = knots._penalty(k)
+    pen = crossval._penalty(k)
     C = np.full((nf, n, d), 5.0)
     kcv.solve_folds(H, rhs, counts, pen, 1e-3, 1e-1, np.empty((n, k)), C, (0.0,) * k, (0.0,) * d)
     ref = _reference_solve_folds(H, rhs, counts, pen, 1e-3, 1e-1)

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from splineimu.spline import knots
+from splineimu.spline import crossval
 from splineimu.spline import surrogate as sur
 
 RATE_HZ = 200.0
@@ -40,7 +40,7 @@ def test_surrogate_power_around_the_cut_off(kind, below, dt):
     t = np.arange(0.0, 60.0, 1.0 / RATE_HZ)
     motion = 0.5 * np.c_[np.sin(2 * np.pi * 0.3 * t), np.cos(2 * np.pi * 0.5 * t), np.sin(2 * np.pi * 0.2 * t + 1)]
     noise = _noise(kind, t.size, np.random.default_rng(3))
-    windows = knots._windows(t, np.ascontiguousarray(motion + noise), np.ones(t.size))
+    windows = crossval._windows(t, np.ascontiguousarray(motion + noise), np.ones(t.size))
     first = sur.noise_spectrum(windows[0], 4, dt, np.random.default_rng(7))[1]
     surrogate = sur.noise_surrogates(windows, 4, dt)[0][0]
     f = np.fft.rfftfreq(t.size, 1.0 / RATE_HZ)

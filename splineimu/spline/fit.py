@@ -45,7 +45,8 @@ from .checks import (
 )
 from .controls import _quat_wxyz
 from .core import KINDS, Spline
-from .knots import _LADDER, MAX_CV_POSES, _windows, choose_knot_spacing, prediction_warnings
+from .crossval import MAX_CV_POSES, _windows
+from .knots import _LADDER, choose_knot_spacing, prediction_warnings
 from .problem import _Problem
 from .report import FitReport, FitWarning
 from .signals import MAX_CONTROL_TURN_RAD, max_rotation_spacing, rotation_increments
