@@ -86,3 +86,11 @@ def best_fixed(t, p, q, duration_s, settings, exclude=None):
     errs = [imu_errors(fit(t, p, q, order=k, knot_spacing_s=dt, reject_outliers=exclude is None), duration_s,
                        exclude=exclude) for k, dt in settings]
     return min(e[0] for e in errs), min(e[1] for e in errs)
+
+
+def gyro_error(sc, duration_s, margin=1.0):
+    """A function of a spline: its RMS gyro error [rad/s] against scene ``sc`` on [margin,
+    duration - margin] at 200 Hz."""
+    te = np.arange(margin, duration_s - margin, 0.005)
+    g0 = sc.imu(te)[0]
+    return lambda spl: float(np.sqrt(np.mean(np.sum((spl.imu(te)[0] - g0) ** 2, axis=1))))

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from fit_scenes import best_fixed, imu_errors, noise, poses, scene_poses
+from fit_scenes import best_fixed, gyro_error, imu_errors, noise, poses, scene_poses
 
 from splineimu import fit, lie
 from splineimu.errors import InputError
@@ -336,11 +336,7 @@ def test_fast_smooth_rotation_walks_to_its_turn_limit():
     dur = 20.0
     sc, t, p, R = scene_poses("flips", "ar1", dur)
     q = lie.matrix_to_quat_xyzw(R)
-    te = np.arange(1.0, dur - 1.0, 0.005)
-    g0 = sc.imu(te)[0]
-
-    def gyro_err(spl):
-        return float(np.sqrt(np.mean(np.sum((spl.imu(te)[0] - g0) ** 2, axis=1))))
+    gyro_err = gyro_error(sc, dur)
 
     spl, rep = fit(t, p, q, return_report=True)
     best = min(gyro_err(fit(t, p, q, order=6, knot_spacing_s=dt, reject_outliers=False)) for dt in (0.055, 0.07, 0.08))
@@ -456,11 +452,7 @@ def test_high_rate_input_is_cross_validated_on_windows_of_seconds():
         assert len(wins) == count and min(wd.t[-1] - wd.t[0] for wd in wins) >= span - 0.01, (rate, len(wins))
     sc, t, p, R = scene_poses("circle", "white", 60.0, rate_hz=1000.0, seed=1)
     q = lie.matrix_to_quat_xyzw(R)
-    te = np.arange(1.0, 59.0, 0.005)
-    g0 = sc.imu(te)[0]
-
-    def gyro_err(s):
-        return float(np.sqrt(np.mean(np.sum((s.imu(te)[0] - g0) ** 2, axis=1))))
+    gyro_err = gyro_error(sc, 60.0)
 
     spl, rep = fit(t, p, q, return_report=True)
     fixed = gyro_err(fit(t, p, q, order=4, knot_spacing_s=2.56, reject_outliers=False))
@@ -476,11 +468,7 @@ def test_gyro_bias_estimate_is_corrected_for_white_noise(scene_name, spacings):
     (measured now 1.02x and 1.04x; over seeds 1-10: 1.00-1.02x and 0.98-1.11x)."""
     sc, t, p, R = scene_poses(scene_name, "white", 60.0, seed=1)
     q = lie.matrix_to_quat_xyzw(R)
-    te = np.arange(1.0, 59.0, 0.005)
-    g0 = sc.imu(te)[0]
-
-    def gyro_err(s):
-        return float(np.sqrt(np.mean(np.sum((s.imu(te)[0] - g0) ** 2, axis=1))))
+    gyro_err = gyro_error(sc, 60.0)
 
     spl, rep = fit(t, p, q, return_report=True)
     best = min(gyro_err(fit(t, p, q, order=k, knot_spacing_s=dt, reject_outliers=False))
@@ -499,11 +487,7 @@ def test_slow_steady_turning_gets_knots_up_to_135_degrees():
 
     sc, t, p, R = scene_poses("screw", "white", 60.0, seed=1)
     q = lie.matrix_to_quat_xyzw(R)
-    te = np.arange(1.0, 59.0, 0.005)
-    g0 = sc.imu(te)[0]
-
-    def gyro_err(s):
-        return float(np.sqrt(np.mean(np.sum((s.imu(te)[0] - g0) ** 2, axis=1))))
+    gyro_err = gyro_error(sc, 60.0)
 
     spl, rep = fit(t, p, q, return_report=True)
     at_90 = min(gyro_err(fit(t, p, q, order=k, knot_spacing_s=2.4, reject_outliers=False)) for k in (4, 5, 6))
