@@ -49,7 +49,7 @@ from .crossval import MAX_CV_POSES, _windows
 from .knots import _LADDER, choose_knot_spacing, prediction_warnings
 from .problem import _Problem
 from .report import FitReport, FitWarning
-from .signals import MAX_CONTROL_TURN_RAD, max_rotation_spacing, rotation_increments
+from .signals import MAX_CONTROL_TURN_RAD, anchor_block, max_rotation_spacing, rotation_increments
 from .surrogate import prediction_at_spacing
 
 #: Poses (the middle ones) on which the rotation spline's bias is checked (:func:`_rotation_bias`).
@@ -290,7 +290,7 @@ def _rotation_bias(choice, rot, Rc_fit, max_iter):
     n = min(rot.t.size, MAX_CV_POSES, max(BIAS_CHECK_POSES, int(40 * dt / np.median(np.diff(rot.t)))))
     sl = slice((rot.t.size - n) // 2, (rot.t.size - n) // 2 + n)
     t, w = rot.t[sl], rot.w[sl]
-    (wd,) = _windows(t, rotation_increments(rot.R[sl]), w, True)
+    (wd,) = _windows(t, rotation_increments(rot.R[sl], anchor_block(t)), w, True)
     idx = wd.scored_index
     if idx.size < 2 or (t[-1] - t[0]) / dt < 3 * k:
         return

@@ -114,7 +114,7 @@ from .._kernels import cv as _kcv
 from ..errors import SplineImuError
 from .crossval import _STEP, _correlation_lag, _search, _windows
 from .report import WARN_ACCEL_M_S2, WARN_GYRO_RAD_S, FitWarning
-from .signals import MAX_CONTROL_TURN_RAD, max_rotation_spacing, rotation_increments
+from .signals import MAX_CONTROL_TURN_RAD, anchor_block, max_rotation_spacing, rotation_increments
 from .surrogate import motion_limited, noise_surrogates
 
 ORDERS = (4, 5, 6)
@@ -383,7 +383,8 @@ def choose_knot_spacing(t, P, R, w=None, rotation_order="auto", position_order="
     w = np.ones(t.size) if w is None else np.asarray(w, dtype=np.float64)
     ro = ORDERS if rotation_order == "auto" else (int(rotation_order),)
     po = ORDERS if position_order == "auto" else (int(position_order),)
-    rot = choose_signal(t, rotation_increments(R), w, 1, ro, rotation_dt, max_rotation_spacing(t, R, max_turn_rad),
+    rot = choose_signal(t, rotation_increments(R, anchor_block(t)), w, 1, ro, rotation_dt,
+                        max_rotation_spacing(t, R, max_turn_rad),
                         increments=True)
     pos = choose_signal(t, np.ascontiguousarray(P), w, 2, po, position_dt)
     # an orientation error dtheta (isotropic) turns the specific force f by f x dtheta: RMS
