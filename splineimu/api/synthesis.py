@@ -262,7 +262,8 @@ def _fits(job, n, write, tum=False):
     whole = " and ".join(f for f, on in (("--bag", out.bag), ("--plot", out.plot)) if on and write) or None
     whole = whole if write else "the in-memory result"
     check_record_fits(n, rate_hz=job.imu.rate_hz if job.imu.timestamps is None else None, whole=whole,
-                      out_dir=out.dir if write else None, tum=out.tum if tum else None)
+                      out_dir=out.dir if write else None, tum=out.tum if tum else None,
+                      extra_tables=int(bool(job.imu.increments)) + int(job.imu.vibration is not None))
 
 
 def _stamps(job, first_ns: int, last_ns: int, log, seed=None, write=True):

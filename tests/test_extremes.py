@@ -1,0 +1,45 @@
+"""The command line at the extremes of its inputs: output sizes, rates far from 200 Hz, Unix-ns stamps."""
+
+from __future__ import annotations
+
+import pytest
+
+from splineimu.cli import main
+
+
+def _table_bytes(out):
+    files = [p for p in out.rglob("*") if p.suffix in (".csv", ".tum")]
+    return sum(p.stat().st_size for p in files), len(files)
+
+
+def test_disk_estimate_covers_what_is_written(tmp_path):
+    """The free-space check must not under-count: with 450 bytes per sample estimated and up to
+    ~670 written (Unix-ns stamps, a noisy sensor model, a lever arm), a run the check let through
+    could fill the disk."""
+    from splineimu.resources import DISK_BYTES, EXTRA_TABLE_BYTES
+
+    common = ["scene", "ellipse", "--duration", "1", "--rate", "200", "--t0-ns", "1700000000000000000",
+              "--imu", "adis16448", "--seed", "1",
+              "--extrinsic", "{translation: [0.1, 0.02, 0.03], quat_xyzw: [0, 0, 0.3826834, 0.9238795]}"]
+    assert main([*common, "-o", str(tmp_path / "a")]) == 0
+    written, n_files = _table_bytes(tmp_path / "a")
+    assert n_files == 3
+    per_sample = written / 201
+    assert 0.8 * DISK_BYTES < per_sample <= DISK_BYTES, per_sample  # measured 652
+    vibration = ("{accel: [{freq_hz: 37, amplitude: [0.5, 0.2, 0.1]}], "
+                 "gyro: [{freq_hz: 41, amplitude: [0.1, 0.1, 0.1]}]}")
+    assert main([*common, "--increments", "--vibration", vibration, "-o", str(tmp_path / "b")]) == 0
+    written_b, n_files = _table_bytes(tmp_path / "b")
+    assert n_files == 5
+    per_extra = (written_b - written) / 201 / 2
+    assert 0.7 * EXTRA_TABLE_BYTES < per_extra <= EXTRA_TABLE_BYTES, per_extra
+
+
+def test_disk_check_counts_the_optional_tables(tmp_path, monkeypatch):
+    import splineimu.resources as res
+
+    monkeypatch.setattr(res, "available_memory_bytes", lambda: 10**12)
+    monkeypatch.setattr(res, "free_disk_bytes", lambda path: 10_000 * (res.DISK_BYTES + res.EXTRA_TABLE_BYTES))
+    res.check_record_fits(10_000, rate_hz=200.0, out_dir=tmp_path, extra_tables=1)
+    with pytest.raises(res.ConfigError, match="of disk at"):
+        res.check_record_fits(10_000, rate_hz=200.0, out_dir=tmp_path, extra_tables=2)
