@@ -43,3 +43,17 @@ def test_disk_check_counts_the_optional_tables(tmp_path, monkeypatch):
     res.check_record_fits(10_000, rate_hz=200.0, out_dir=tmp_path, extra_tables=1)
     with pytest.raises(res.ConfigError, match="of disk at"):
         res.check_record_fits(10_000, rate_hz=200.0, out_dir=tmp_path, extra_tables=2)
+
+
+@pytest.mark.parametrize("args, span", [(["--rate", "0.001"], "10"), (["--duration", "0.001"], "0.001")])
+def test_a_single_sample_record_is_refused(tmp_path, capsys, args, span):
+    """--rate 0.001 over 10 s (a unit slip for kHz) wrote a one-row IMU record without a word."""
+    base = {"--rate": "200", "--duration": "10"}
+    base.update(dict(zip(args[::2], args[1::2])))
+    rc = main(["scene", "ellipse", *[x for kv in base.items() for x in kv], "-o", str(tmp_path / "o")])
+    err = capsys.readouterr().err
+    assert rc == 1 and err.count("\n") == 1, err
+    assert f"gives a single IMU sample over the {span} s of motion" in err
+    assert not (tmp_path / "o").exists()
+    assert main(["scene", "ellipse", "--duration", "10", "--rate", "0.1", "-o", str(tmp_path / "two")]) == 0
+    assert (tmp_path / "two" / "mav0" / "imu0" / "data.csv").read_text().count("\n") == 1 + 2

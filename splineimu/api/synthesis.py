@@ -270,7 +270,11 @@ def _stamps(job, first_ns: int, last_ns: int, log, seed=None, write=True):
     """The stamps: a grid at ``rate_hz``, the given ``timestamps``, or (with a timing model) the
     :class:`~splineimu.imu.timing.SampleTimes` of the IMU's clock."""
     if job.imu.timestamps is None:  # a grid: refuse what cannot fit before allocating it
-        _fits(job, int((last_ns - first_ns) * job.imu.rate_hz / 1e9) + 1, write)
+        n = int((last_ns - first_ns) * job.imu.rate_hz / 1e9) + 1
+        if n < 2:  # --rate 0.001 over 600 s wrote a one-row "record" in silence
+            raise job.imu._err("rate_hz", f"= {job.imu.rate_hz:g} Hz gives a single IMU sample over the "
+                                          f"{(last_ns - first_ns) / 1e9:.6g} s of motion; a record needs 2 or more")
+        _fits(job, n, write)
     if job.imu.timing is not None:
         from ..pipeline import TIMING_SEED_KEY, child_seed
 
