@@ -57,3 +57,26 @@ def test_a_single_sample_record_is_refused(tmp_path, capsys, args, span):
     assert not (tmp_path / "o").exists()
     assert main(["scene", "ellipse", "--duration", "10", "--rate", "0.1", "-o", str(tmp_path / "two")]) == 0
     assert (tmp_path / "two" / "mav0" / "imu0" / "data.csv").read_text().count("\n") == 1 + 2
+
+
+def _write_tum(path, t_s, angle_z_rad, sign=None):
+    import numpy as np
+
+    q = np.column_stack([np.zeros((t_s.size, 2)), np.sin(angle_z_rad / 2), np.cos(angle_z_rad / 2)])
+    if sign is not None:
+        q = q * sign[:, None]
+    path.write_text("".join(f"{t:.9f} 1 2 3 {x!r} {y!r} {z!r} {w!r}\n" for t, (x, y, z, w) in zip(t_s, q.tolist())))
+    return path
+
+
+def test_a_turn_of_179_degrees_between_poses_is_refused_naming_the_file(tmp_path, capsys):
+    """The fit's refusal reached the user without the file it was about."""
+    import numpy as np
+
+    t = np.arange(200) * 0.01
+    poses = _write_tum(tmp_path / "jump.tum", t, 0.1 * t + np.radians(179.0) * (t >= 1.0))
+    rc = main(["from-tum", str(poses), "-o", str(tmp_path / "o")])
+    err = capsys.readouterr().err
+    assert rc == 1 and err.count("\n") == 1, err
+    assert err.startswith(f"splineimu from-tum: error: {poses}: ") and "rotate by 179.1 deg" in err, err
+    assert "Traceback" not in err and not (tmp_path / "o").exists()

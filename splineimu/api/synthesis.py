@@ -470,9 +470,14 @@ def _fit(job, track, log):
     origin = int(track.t_ns[0])
     t_s = (track.t_ns - origin).astype(np.float64) / 1e9
     smooth = {} if sp.smoothness is None else {"smoothness": sp.smoothness}  # None: the fit's default
-    spl, rep = fit(t_s, track.positions, track.quat_xyzw, kind=sp.kind, order=sp.order,
-                   knot_spacing_s=sp.knot_spacing_s, **smooth, origin_ns=origin,
-                   reject_outliers=not sp.keep_outliers, progress=track.t_ns.size > 100_000, return_report=True)
+    try:
+        spl, rep = fit(t_s, track.positions, track.quat_xyzw, kind=sp.kind, order=sp.order,
+                       knot_spacing_s=sp.knot_spacing_s, **smooth, origin_ns=origin,
+                       reject_outliers=not sp.keep_outliers, progress=track.t_ns.size > 100_000, return_report=True)
+    except InputError as exc:  # the fit's refusals (a turn of 90 deg or more between poses) name the file
+        if exc.path is not None or job.motion.path is None:
+            raise
+        raise InputError(exc.problem, path=job.motion.path) from None
     for w in fit_warnings(rep):  # also in report.json and in the fit summary
         log.note(f"warning: {w['message']}")
     if rep.dropped_poses:
