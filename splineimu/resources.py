@@ -38,11 +38,13 @@ TUM_BYTES = 300
 DISK_BYTES = 700
 #: disk per sample of each optional IMU-shaped table (increments.csv, vibration.csv: up to 147 + 12)
 EXTRA_TABLE_BYTES = 160
+#: outputs from this size on are announced before they are written (a note with the size)
+LARGE_OUTPUT_BYTES = 2 * 10**9
 #: the share of the available memory a record may use
 MEMORY_SHARE = 0.8
 
 __all__ = ["available_memory_bytes", "free_disk_bytes", "check_record_fits", "STREAM_BYTES", "WHOLE_BYTES", "TUM_BYTES",
-           "DISK_BYTES", "EXTRA_TABLE_BYTES"]
+           "DISK_BYTES", "EXTRA_TABLE_BYTES", "LARGE_OUTPUT_BYTES", "output_bytes", "size_text"]
 
 
 def _meminfo_available() -> int | None:
@@ -98,8 +100,18 @@ def free_disk_bytes(path) -> int | None:
     return None
 
 
-def _gb(n: float) -> str:
+def size_text(n: float) -> str:
+    """``n`` bytes as ``'25.2 GB'`` or ``'45 MB'``."""
     return f"{n / 1e9:.3g} GB" if n >= 1e8 else f"{n / 1e6:.3g} MB"
+
+
+_gb = size_text
+
+
+def output_bytes(n_samples: int, extra_tables: int = 0) -> int:
+    """Disk an output folder of ``n_samples`` takes: its three tables and ``extra_tables`` more
+    (an upper estimate, :data:`DISK_BYTES` and :data:`EXTRA_TABLE_BYTES` per sample)."""
+    return int(n_samples) * (DISK_BYTES + extra_tables * EXTRA_TABLE_BYTES)
 
 
 def check_record_fits(n_samples: int, *, rate_hz: float | None = None, whole: str | None = None,
@@ -138,10 +150,10 @@ def check_record_fits(n_samples: int, *, rate_hz: float | None = None, whole: st
         raise ConfigError(f"{what} need about {_gb(need)} of memory, {_gb(avail)} are available{held}; {way}")
     if n_samples * STREAM_BYTES > 2**62:  # absurd even with unlimited memory
         raise ConfigError(f"{what} are too many; {way}")
-    for target, per_disk in ((out_dir, DISK_BYTES + extra_tables * EXTRA_TABLE_BYTES), (tum, DISK_BYTES // 4)):
+    for target, need_disk in ((out_dir, output_bytes(n, extra_tables)), (tum, n * (DISK_BYTES // 4))):
         if target is None:
             continue
         free = free_disk_bytes(target)
-        if free is not None and n * per_disk > free:
-            raise ConfigError(f"{what} need about {_gb(n * per_disk)} of disk at '{target}', {_gb(free)} are free; "
+        if free is not None and need_disk > free:
+            raise ConfigError(f"{what} need about {_gb(need_disk)} of disk at '{target}', {_gb(free)} are free; "
                               f"{way}, or choose another output")

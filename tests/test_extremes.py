@@ -80,3 +80,15 @@ def test_a_turn_of_179_degrees_between_poses_is_refused_naming_the_file(tmp_path
     assert rc == 1 and err.count("\n") == 1, err
     assert err.startswith(f"splineimu from-tum: error: {poses}: ") and "rotate by 179.1 deg" in err, err
     assert "Traceback" not in err and not (tmp_path / "o").exists()
+
+
+def test_a_large_output_is_announced_with_its_size(tmp_path, capsys, monkeypatch):
+    """A 10 kHz hour (36M samples, ~23 GB) started writing without a word about its size."""
+    import splineimu.resources as res
+
+    monkeypatch.setattr(res, "LARGE_OUTPUT_BYTES", 2002 * res.DISK_BYTES)
+    assert main(["scene", "static", "--duration", "10", "--rate", "200", "-o", str(tmp_path / "a")]) == 0
+    assert "note" not in capsys.readouterr().err
+    assert main(["scene", "static", "--duration", "10", "--rate", "200.1", "-o", str(tmp_path / "b")]) == 0
+    err = capsys.readouterr().err
+    assert f"note: 2002 IMU samples: up to 1.4 MB of tables will be written to {tmp_path / 'b'}" in err, err

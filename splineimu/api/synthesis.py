@@ -254,16 +254,20 @@ def _seed(job):
     return int(np.random.SeedSequence().entropy % (2**63))
 
 
-def _fits(job, n, write, tum=False):
-    """Refuse, before allocating, a record of ``n`` samples that cannot fit (memory, disk)."""
-    from ..resources import check_record_fits
+def _fits(job, n, write, tum=False, log=None):
+    """Refuse, before allocating, a record of ``n`` samples that cannot fit (memory, disk); announce
+    a large output folder (a note with its size) before it is written."""
+    from ..resources import LARGE_OUTPUT_BYTES, check_record_fits, output_bytes, size_text
 
     out = job.output
     whole = " and ".join(f for f, on in (("--bag", out.bag), ("--plot", out.plot)) if on and write) or None
     whole = whole if write else "the in-memory result"
+    extra = int(bool(job.imu.increments)) + int(job.imu.vibration is not None)
     check_record_fits(n, rate_hz=job.imu.rate_hz if job.imu.timestamps is None else None, whole=whole,
-                      out_dir=out.dir if write else None, tum=out.tum if tum else None,
-                      extra_tables=int(bool(job.imu.increments)) + int(job.imu.vibration is not None))
+                      out_dir=out.dir if write else None, tum=out.tum if tum else None, extra_tables=extra)
+    if write and log is not None and output_bytes(n, extra) >= LARGE_OUTPUT_BYTES:
+        log.note(f"note: {n} IMU samples: up to {size_text(output_bytes(n, extra))} of tables will be "
+                 f"written to {out.dir}")
 
 
 def _stamps(job, first_ns: int, last_ns: int, log, seed=None, write=True):
@@ -274,7 +278,7 @@ def _stamps(job, first_ns: int, last_ns: int, log, seed=None, write=True):
         if n < 2:  # --rate 0.001 over 600 s wrote a one-row "record" in silence
             raise job.imu._err("rate_hz", f"= {job.imu.rate_hz:g} Hz gives a single IMU sample over the "
                                           f"{(last_ns - first_ns) / 1e9:.6g} s of motion; a record needs 2 or more")
-        _fits(job, n, write)
+        _fits(job, n, write, log=log)
     if job.imu.timing is not None:
         from ..pipeline import TIMING_SEED_KEY, child_seed
 
@@ -295,7 +299,7 @@ def _stamps(job, first_ns: int, last_ns: int, log, seed=None, write=True):
     if not keep.any():
         raise InputError(f"no stamp lies inside the motion's span [{first_ns}, {last_ns}] ns",
                          path=job.imu.timestamps)
-    _fits(job, int(keep.sum()), write)
+    _fits(job, int(keep.sum()), write, log=log)
     dropped = int((~keep).sum())
     if dropped:
         log.line(f"note: {dropped} stamps of {job.imu.timestamps} lie outside the pose span and were dropped")
