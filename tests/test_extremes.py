@@ -92,3 +92,24 @@ def test_a_large_output_is_announced_with_its_size(tmp_path, capsys, monkeypatch
     assert main(["scene", "static", "--duration", "10", "--rate", "200.1", "-o", str(tmp_path / "b")]) == 0
     err = capsys.readouterr().err
     assert f"note: 2002 IMU samples: up to 1.4 MB of tables will be written to {tmp_path / 'b'}" in err, err
+
+
+def test_scene_tum_streams_in_pieces_with_the_same_bytes(tmp_path, monkeypatch):
+    """A scene's TUM file was evaluated whole: ~390 bytes per pose, 14 GB for a 10 kHz hour (883 MB
+    for 2M poses, now 262 MB). In pieces it must keep the bytes, signs continuing across pieces."""
+    import numpy as np
+
+    import splineimu.io.tum as tum
+    from splineimu.lie import quat_make_continuous
+    from splineimu.scenes import make_scene
+    from splineimu.timegrid import uniform_stamps_ns
+
+    scene = make_scene("flips", duration_s=3.0, t0_ns=1_700_000_000_000_000_000)
+    t_ns = uniform_stamps_ns(scene.origin_ns, scene.origin_ns + 3_000_000_000, 200.0)
+    pos, quat = scene.pose(scene.t_s_from_ns(t_ns))
+    whole = tum.write_tum(tmp_path / "whole.tum", t_ns, pos, quat_make_continuous(quat)).read_bytes()
+    monkeypatch.setattr(tum, "SCENE_TUM_PIECE", 7)
+    pieces = tum.write_scene_tum(scene, tmp_path / "pieces.tum", 200.0)
+    assert pieces.read_bytes() == whole
+    q = tum.read_tum(pieces).quat_xyzw
+    assert q.shape == (601, 4) and np.all(np.sum(q[1:] * q[:-1], axis=1) > 0)
