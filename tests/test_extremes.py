@@ -128,3 +128,24 @@ def test_a_bag_shows_its_progress(tmp_path, capsys, progress, shown):
     err = capsys.readouterr().err
     assert ("bag:" in err and "messages" in err) is shown, err
     assert (tmp_path / "b.bag").stat().st_size > n * 300
+
+
+def test_a_pose_file_too_large_for_memory_is_refused_before_reading(tmp_path, capsys, monkeypatch):
+    """3.6M poses (331 MB) under a 1.1 GB limit ran out of memory inside the reader ("out of memory;
+    try a shorter span, a lower --rate"), and without a limit the kernel kills the process without a
+    word; the file is now weighed before it is read."""
+    import numpy as np
+
+    import splineimu.resources as res
+
+    t = np.arange(300) * 0.01
+    poses = _write_tum(tmp_path / "p.tum", t, 0.3 * t)
+    size = poses.stat().st_size
+    monkeypatch.setattr(res, "available_memory_bytes", lambda: int(res.POSE_FILE_BYTES * size / res.MEMORY_SHARE) - 1)
+    rc = main(["from-tum", str(poses), "-o", str(tmp_path / "o")])
+    err = capsys.readouterr().err
+    assert rc == 1 and err.count("\n") == 1, err
+    assert f"error: {poses}: a pose file of {size / 1e6:.3g} MB needs about {6 * size / 1e6:.3g} MB of memory" in err
+    assert not (tmp_path / "o").exists()
+    monkeypatch.setattr(res, "available_memory_bytes", lambda: int(res.POSE_FILE_BYTES * size / res.MEMORY_SHARE) + 1)
+    assert main(["from-tum", str(poses), "-o", str(tmp_path / "o")]) == 0

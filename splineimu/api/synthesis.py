@@ -459,7 +459,9 @@ def _prepare_poses(job, log) -> PreparedMotion:
 def _read(m: PosesInput):
     if m.format == "tum":
         from ..io.tum import read_tum
+        from ..resources import check_pose_file_fits
 
+        check_pose_file_fits(m.path)  # not the kernel's out-of-memory kill, without a word
         return read_tum(m.path, repeated_stamps=m.repeated_stamps)
     from ..io.euroc import read_euroc_groundtruth
 
