@@ -106,7 +106,9 @@ def free_disk_bytes(path) -> int | None:
 
 
 def size_text(n: float) -> str:
-    """``n`` bytes as ``'25.2 GB'`` or ``'331 MB'``."""
+    """``n`` bytes as ``'2.52 TB'``, ``'25.2 GB'`` or ``'331 MB'``."""
+    if n >= 1e12:
+        return f"{n / 1e12:.3g} TB"
     return f"{n / 1e9:.3g} GB" if n >= 1e9 else f"{n / 1e6:.3g} MB"
 
 

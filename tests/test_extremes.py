@@ -149,3 +149,25 @@ def test_a_pose_file_too_large_for_memory_is_refused_before_reading(tmp_path, ca
     assert not (tmp_path / "o").exists()
     monkeypatch.setattr(res, "available_memory_bytes", lambda: int(res.POSE_FILE_BYTES * size / res.MEMORY_SHARE) + 1)
     assert main(["from-tum", str(poses), "-o", str(tmp_path / "o")]) == 0
+
+
+def test_a_batch_too_large_for_the_disk_is_refused_before_any_run(tmp_path, monkeypatch):
+    """Each run checked only its own folder: 100 runs of a 10 kHz hour (2.5 TB) started, filled the
+    disk run by run, and failed the rest."""
+    import splineimu.resources as res
+    from splineimu.api.batch import run_batch
+    from splineimu.errors import ConfigError
+
+    scene = tmp_path / "s.yaml"
+    scene.write_text("motion: {scene: ellipse, duration_s: 2}\nimu: {rate_hz: 100, model: adis16448}\nseed: 3\n"
+                     "output: {dir: out}\nvary:\n  imu.model.gyroscope_noise_density: {uniform: [1.0e-4, 2.0e-4]}\n")
+    per_run = 201 * res.DISK_BYTES
+    monkeypatch.setattr(res, "free_disk_bytes", lambda path: 3 * per_run - 1)
+    with pytest.raises(ConfigError, match=r"3 runs of 201 IMU samples need about 0\.422 MB of disk at .*give fewer"):
+        run_batch(scene, 3, tmp_path / "mc", workers=1, progress=False)
+    assert not (tmp_path / "mc").exists()
+    lines = []
+    monkeypatch.setattr(res, "LARGE_OUTPUT_BYTES", 2 * per_run)
+    result = run_batch(scene, 2, tmp_path / "mc", workers=1, progress=False, echo=lines.append)
+    assert result.ok and result.ran == 2
+    assert f"note: 2 runs of 201 IMU samples: up to 0.281 MB of tables will be written to {tmp_path / 'mc'}" in lines
