@@ -3,7 +3,8 @@
 A record of N samples costs, per sample, about :data:`STREAM_BYTES` of memory when it is
 streamed to disk (the stamp arrays are whole), :data:`WHOLE_BYTES` when it is held whole (a
 ROS bag or the plots need the whole record), :data:`TUM_BYTES` for a scene's TUM file, and
-:data:`DISK_BYTES` of disk for the output folder's text tables. :func:`check_record_fits`
+:data:`DISK_BYTES` of disk for the output folder's text tables (plus :data:`EXTRA_TABLE_BYTES` for
+each optional IMU-shaped table: increments, vibration). :func:`check_record_fits`
 compares these with what the process can still allocate (the free memory of the machine and
 the address-space limit of the process, ``ulimit -v``) and with the free space where the
 output goes, and refuses with the numbers and the way out.
@@ -29,15 +30,26 @@ from .errors import ConfigError
 STREAM_BYTES = 48
 #: memory per sample held whole (IMU, ground truth with rotation matrices, noise, bag messages)
 WHOLE_BYTES = 1000
-#: memory per sample of a scene's poses written as a TUM file (held whole)
-TUM_BYTES = 300
+#: memory per sample of a scene's poses written as a TUM file (streamed like the record: 19 measured;
+#: 390 when the poses were held whole)
+TUM_BYTES = STREAM_BYTES
 #: disk per sample: imu0/data.csv, state_groundtruth_estimate0/data.csv and groundtruth.tum
-DISK_BYTES = 450
+#: (measured up to 133 + 351 + 154 bytes with a noisy sensor model and a lever arm, 12 more per
+#: table with Unix-ns stamps; 450 let a run start that then filled the disk)
+DISK_BYTES = 700
+#: disk per sample of each optional IMU-shaped table (increments.csv, vibration.csv: up to 147 + 12)
+EXTRA_TABLE_BYTES = 160
+#: outputs from this size on are announced before they are written (a note with the size)
+LARGE_OUTPUT_BYTES = 2 * 10**9
+#: memory per byte of a TUM pose file, read and fitted: measured 6.0 (1 kHz mocap, 92-byte lines,
+#: 3.6M poses: 4.4 to read, then the fit) to 10.4 (noise-free 155-byte lines, fine knots)
+POSE_FILE_BYTES = 6
 #: the share of the available memory a record may use
 MEMORY_SHARE = 0.8
 
-__all__ = ["available_memory_bytes", "free_disk_bytes", "check_record_fits", "STREAM_BYTES", "WHOLE_BYTES", "TUM_BYTES",
-           "DISK_BYTES"]
+__all__ = ["available_memory_bytes", "free_disk_bytes", "check_record_fits", "check_pose_file_fits", "STREAM_BYTES",
+           "WHOLE_BYTES", "TUM_BYTES", "DISK_BYTES", "EXTRA_TABLE_BYTES", "LARGE_OUTPUT_BYTES", "POSE_FILE_BYTES",
+           "output_bytes", "size_text"]
 
 
 def _meminfo_available() -> int | None:
@@ -93,12 +105,24 @@ def free_disk_bytes(path) -> int | None:
     return None
 
 
-def _gb(n: float) -> str:
-    return f"{n / 1e9:.3g} GB" if n >= 1e8 else f"{n / 1e6:.3g} MB"
+def size_text(n: float) -> str:
+    """``n`` bytes as ``'2.52 TB'``, ``'25.2 GB'`` or ``'331 MB'``."""
+    if n >= 1e12:
+        return f"{n / 1e12:.3g} TB"
+    return f"{n / 1e9:.3g} GB" if n >= 1e9 else f"{n / 1e6:.3g} MB"
+
+
+_gb = size_text
+
+
+def output_bytes(n_samples: int, extra_tables: int = 0) -> int:
+    """Disk an output folder of ``n_samples`` takes: its three tables and ``extra_tables`` more
+    (an upper estimate, :data:`DISK_BYTES` and :data:`EXTRA_TABLE_BYTES` per sample)."""
+    return int(n_samples) * (DISK_BYTES + extra_tables * EXTRA_TABLE_BYTES)
 
 
 def check_record_fits(n_samples: int, *, rate_hz: float | None = None, whole: str | None = None,
-                      out_dir=None, tum=None) -> None:
+                      out_dir=None, tum=None, extra_tables: int = 0) -> None:
     """Refuse a record that cannot fit, before anything is allocated.
 
     Parameters
@@ -112,7 +136,9 @@ def check_record_fits(n_samples: int, *, rate_hz: float | None = None, whole: st
     out_dir : path-like, optional
         The output folder (its free disk space is checked).
     tum : path-like, optional
-        A TUM file of the poses (held whole; its disk space is checked).
+        A TUM file of the poses (its disk space is checked).
+    extra_tables : int, default 0
+        Optional IMU-shaped tables written besides the three (increments, vibration).
 
     Raises
     ------
@@ -127,14 +153,42 @@ def check_record_fits(n_samples: int, *, rate_hz: float | None = None, whole: st
     need = n * per
     avail = available_memory_bytes()
     if avail is not None and need > MEMORY_SHARE * avail:
-        held = f"; the whole record is held in memory for {whole or '--tum'}" if (whole or tum) else ""
+        held = f"; the whole record is held in memory for {whole}" if whole else ""
         raise ConfigError(f"{what} need about {_gb(need)} of memory, {_gb(avail)} are available{held}; {way}")
     if n_samples * STREAM_BYTES > 2**62:  # absurd even with unlimited memory
         raise ConfigError(f"{what} are too many; {way}")
-    for target, per_disk in ((out_dir, DISK_BYTES), (tum, DISK_BYTES // 2)):
+    for target, need_disk in ((out_dir, output_bytes(n, extra_tables)), (tum, n * (DISK_BYTES // 4))):
         if target is None:
             continue
         free = free_disk_bytes(target)
-        if free is not None and n * per_disk > free:
-            raise ConfigError(f"{what} need about {_gb(n * per_disk)} of disk at '{target}', {_gb(free)} are free; "
+        if free is not None and need_disk > free:
+            raise ConfigError(f"{what} need about {_gb(need_disk)} of disk at '{target}', {_gb(free)} are free; "
                               f"{way}, or choose another output")
+
+
+def check_pose_file_fits(path) -> None:
+    """Refuse, before reading it, a TUM pose file too large to read and fit in the available memory.
+
+    It would otherwise end in a MemoryError, or with no limit set, in the kernel's out-of-memory
+    kill without a word (an hour at 10 kHz is a 5.6 GB file, about 34 GB to read and fit).
+    The estimate, :data:`POSE_FILE_BYTES` per byte of the file, is the lower end of what was
+    measured; a missing or unreadable file is left to the reader.
+
+    Raises
+    ------
+    ConfigError
+        With the file, its size, the memory it needs, what is available and the way out.
+
+    Examples
+    --------
+    >>> check_pose_file_fits("no such file")
+    """
+    try:
+        size = Path(path).stat().st_size
+    except OSError:
+        return
+    avail = available_memory_bytes()
+    need = POSE_FILE_BYTES * size
+    if avail is not None and need > MEMORY_SHARE * avail:
+        raise ConfigError(f"{path}: a pose file of {_gb(size)} needs about {_gb(need)} of memory to read and fit, "
+                          f"{_gb(avail)} are available; split the file (or decimate it to a lower rate)")

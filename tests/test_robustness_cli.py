@@ -44,7 +44,8 @@ def test_signal_during_a_long_write_leaves_nothing(tmp_path, sig, code):
     os.kill(p.pid, sig)
     out, err = p.communicate(timeout=120)
     assert p.returncode == code
-    assert "Traceback" not in err and len(err.strip().splitlines()) == 1
+    lines = [ln for ln in err.strip().splitlines() if not ln.startswith("note: ")]  # the 4.2 GB output's size
+    assert "Traceback" not in err and len(lines) == 1, err
     assert _leftovers(tmp_path) == []
     assert [q.name for q in (tmp_path / "X").iterdir()] == ["keep.txt"]  # what was there is untouched
 

@@ -192,6 +192,32 @@ def _prepare_out(out: Path, manifest: dict, resume: bool, force: bool):
                           "use --force to replace it or another OUT", option="--resume")
 
 
+def _check_disk(out: Path, scene, prepared, n_runs: int, echo) -> None:
+    """Refuse a batch whose run folders cannot fit on the disk (each run checked only its own: a
+    batch filled the disk run by run), and announce a large one; from the nominal run's samples."""
+    from ..errors import ConfigError
+    from ..resources import LARGE_OUTPUT_BYTES, free_disk_bytes, output_bytes, size_text
+
+    if prepared is None or n_runs == 0:
+        return  # the span varies from run to run
+    job = scene.job()
+    if job.imu.timestamps is not None:
+        return  # the stamps come from a file
+    if prepared.scene is not None:
+        span_s = prepared.scene.t_max_s - prepared.scene.t_min_s
+    else:
+        span_s = sum(float(p[0].t_ns[-1] - p[0].t_ns[0]) / 1e9 for p in prepared.pieces)
+    n = int(span_s * job.imu.rate_hz) + 1
+    need = n_runs * output_bytes(n, int(bool(job.imu.increments)) + int(job.imu.vibration is not None))
+    free = free_disk_bytes(out)
+    what = f"{n_runs} runs of {n} IMU samples"
+    if free is not None and need > free:
+        raise ConfigError(f"{what} need about {size_text(need)} of disk at '{out}', {size_text(free)} are free; "
+                          "give fewer --runs, a shorter span or a lower rate, or another OUT", option="--runs")
+    if need >= LARGE_OUTPUT_BYTES and echo:
+        echo(f"note: {what}: up to {size_text(need)} of tables will be written to {out}")
+
+
 def _durable_ok(out: Path) -> set:
     """The runs the last ``runs.csv`` lists as ``ok`` (it is written after :func:`os.sync`)."""
     try:
@@ -301,6 +327,8 @@ def run_batch(scene_file, runs: int, out_dir, *, workers: int | None = None, sch
         if echo:
             echo(f"cluster       {result.workers} workers"
                  f"{' at ' + scheduler if scheduler else ' (local, one thread each)'}")
+        _check_disk(out, scene, prepared, sum(not (out / "runs" / run_name(k)).is_dir() for k in range(runs)),
+                    echo)
         if force and out.exists():
             shutil.rmtree(out) if out.is_dir() else out.unlink()
         runs_dir = out / "runs"

@@ -149,7 +149,7 @@ def write_output(syn, out_dir, *, force=False, report: dict | None = None, bag: 
             name = "imu.bag" if bag == "ros1" else "bag_ros2"
             write_bag(tmp / name, bag, syn.t_ns, syn.gyro_rad_s, syn.accel_m_s2, syn.t_true_ns,
                       syn.ideal.position_world, syn.ideal.quat_xyzw, imu_topic=rostopic,
-                      covariances=imu_covariances(syn.imu_config, rate_hz), version=bag_version)
+                      covariances=imu_covariances(syn.imu_config, rate_hz), version=bag_version, progress=progress)
             out_report["bag"] = name
         if plot:
             from ..plots import plot_fit_residuals, plot_imu

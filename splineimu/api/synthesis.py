@@ -254,22 +254,31 @@ def _seed(job):
     return int(np.random.SeedSequence().entropy % (2**63))
 
 
-def _fits(job, n, write, tum=False):
-    """Refuse, before allocating, a record of ``n`` samples that cannot fit (memory, disk)."""
-    from ..resources import check_record_fits
+def _fits(job, n, write, tum=False, log=None):
+    """Refuse, before allocating, a record of ``n`` samples that cannot fit (memory, disk); announce
+    a large output folder (a note with its size) before it is written."""
+    from ..resources import LARGE_OUTPUT_BYTES, check_record_fits, output_bytes, size_text
 
     out = job.output
     whole = " and ".join(f for f, on in (("--bag", out.bag), ("--plot", out.plot)) if on and write) or None
     whole = whole if write else "the in-memory result"
+    extra = int(bool(job.imu.increments)) + int(job.imu.vibration is not None)
     check_record_fits(n, rate_hz=job.imu.rate_hz if job.imu.timestamps is None else None, whole=whole,
-                      out_dir=out.dir if write else None, tum=out.tum if tum else None)
+                      out_dir=out.dir if write else None, tum=out.tum if tum else None, extra_tables=extra)
+    if write and log is not None and output_bytes(n, extra) >= LARGE_OUTPUT_BYTES:
+        log.note(f"note: {n} IMU samples: up to {size_text(output_bytes(n, extra))} of tables will be "
+                 f"written to {out.dir}")
 
 
 def _stamps(job, first_ns: int, last_ns: int, log, seed=None, write=True):
     """The stamps: a grid at ``rate_hz``, the given ``timestamps``, or (with a timing model) the
     :class:`~splineimu.imu.timing.SampleTimes` of the IMU's clock."""
     if job.imu.timestamps is None:  # a grid: refuse what cannot fit before allocating it
-        _fits(job, int((last_ns - first_ns) * job.imu.rate_hz / 1e9) + 1, write)
+        n = int((last_ns - first_ns) * job.imu.rate_hz / 1e9) + 1
+        if n < 2:  # --rate 0.001 over 600 s wrote a one-row "record" in silence
+            raise job.imu._err("rate_hz", f"= {job.imu.rate_hz:g} Hz gives a single IMU sample over the "
+                                          f"{(last_ns - first_ns) / 1e9:.6g} s of motion; a record needs 2 or more")
+        _fits(job, n, write, log=log)
     if job.imu.timing is not None:
         from ..pipeline import TIMING_SEED_KEY, child_seed
 
@@ -290,7 +299,7 @@ def _stamps(job, first_ns: int, last_ns: int, log, seed=None, write=True):
     if not keep.any():
         raise InputError(f"no stamp lies inside the motion's span [{first_ns}, {last_ns}] ns",
                          path=job.imu.timestamps)
-    _fits(job, int(keep.sum()), write)
+    _fits(job, int(keep.sum()), write, log=log)
     dropped = int((~keep).sum())
     if dropped:
         log.line(f"note: {dropped} stamps of {job.imu.timestamps} lie outside the pose span and were dropped")
@@ -450,7 +459,9 @@ def _prepare_poses(job, log) -> PreparedMotion:
 def _read(m: PosesInput):
     if m.format == "tum":
         from ..io.tum import read_tum
+        from ..resources import check_pose_file_fits
 
+        check_pose_file_fits(m.path)  # not the kernel's out-of-memory kill, without a word
         return read_tum(m.path, repeated_stamps=m.repeated_stamps)
     from ..io.euroc import read_euroc_groundtruth
 
@@ -465,9 +476,14 @@ def _fit(job, track, log):
     origin = int(track.t_ns[0])
     t_s = (track.t_ns - origin).astype(np.float64) / 1e9
     smooth = {} if sp.smoothness is None else {"smoothness": sp.smoothness}  # None: the fit's default
-    spl, rep = fit(t_s, track.positions, track.quat_xyzw, kind=sp.kind, order=sp.order,
-                   knot_spacing_s=sp.knot_spacing_s, **smooth, origin_ns=origin,
-                   reject_outliers=not sp.keep_outliers, progress=track.t_ns.size > 100_000, return_report=True)
+    try:
+        spl, rep = fit(t_s, track.positions, track.quat_xyzw, kind=sp.kind, order=sp.order,
+                       knot_spacing_s=sp.knot_spacing_s, **smooth, origin_ns=origin,
+                       reject_outliers=not sp.keep_outliers, progress=track.t_ns.size > 100_000, return_report=True)
+    except InputError as exc:  # the fit's refusals (a turn of 90 deg or more between poses) name the file
+        if exc.path is not None or job.motion.path is None:
+            raise
+        raise InputError(exc.problem, path=job.motion.path) from None
     for w in fit_warnings(rep):  # also in report.json and in the fit summary
         log.note(f"warning: {w['message']}")
     if rep.dropped_poses:

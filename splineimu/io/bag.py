@@ -25,7 +25,8 @@ from ..errors import ConfigError, InputError, OutputExistsError
 from ..validation import as_float_array, as_quat_xyzw, as_stamps_ns, as_vectors, one_of
 from .files import staged_path
 
-__all__ = ["write_bag", "imu_covariances", "BAG_KINDS", "ROS2_BAG_VERSIONS", "ROS2_BAG_VERSION"]
+__all__ = ["write_bag", "imu_covariances", "BAG_KINDS", "ROS2_BAG_VERSIONS", "ROS2_BAG_VERSION",
+           "BAG_PROGRESS_MIN_MESSAGES"]
 
 BAG_KINDS = ("ros1", "ros2")
 #: rosbag2 metadata versions that can be written, and the default (read by Humble and newer).
@@ -81,6 +82,7 @@ def write_bag(
     force: bool = False,
     covariances=None,
     version: int | None = None,
+    progress: bool | None = None,
 ) -> Path:
     """Write IMU samples and (optionally) ground-truth poses to a ROS 1 or ROS 2 bag.
 
@@ -115,6 +117,9 @@ def write_bag(
         message (:func:`imu_covariances`); zero ("unknown") when omitted.
     version : {8, 9}, optional
         rosbag2 metadata version (``kind="ros2"`` only); default :data:`ROS2_BAG_VERSION`.
+    progress : bool, optional
+        Show a progress bar on stderr (default: for :data:`BAG_PROGRESS_MIN_MESSAGES` messages or
+        more, when stderr is a terminal; a bag takes ~16 us per message, 23 s for an hour at 200 Hz).
 
     Returns
     -------
@@ -220,27 +225,47 @@ def write_bag(
         with writer:
             c_imu = writer.add_connection(imu_topic, imu_type, typestore=store)
             c_pose = writer.add_connection(pose_topic, pose_type, typestore=store) if with_poses else None
-            for t, which, i in events:
-                if which == 0:
-                    gx, gy, gz = w_l[i]
-                    ax, ay, az = a_l[i]
-                    msg = Imu(
-                        header=header(i, t, frame_id),
-                        orientation=no_orientation,
-                        orientation_covariance=orient_cov,
-                        angular_velocity=Vector3(x=gx, y=gy, z=gz),
-                        angular_velocity_covariance=gyro_cov,
-                        linear_acceleration=Vector3(x=ax, y=ay, z=az),
-                        linear_acceleration_covariance=accel_cov,
-                    )
-                    writer.write(c_imu, t, serialize(msg, imu_type))
-                else:
-                    px, py, pz = p_l[i]
-                    qx, qy, qz, qw = q_l[i]
-                    msg = PoseStamped(
-                        header=header(i, t, world_frame_id),
-                        pose=Pose(position=Point(x=px, y=py, z=pz),
-                                  orientation=Quaternion(x=qx, y=qy, z=qz, w=qw)),
-                    )
-                    writer.write(c_pose, t, serialize(msg, pose_type))
+            bar = _progress_bar(len(events), progress)
+            try:
+                for k, (t, which, i) in enumerate(events):
+                    if bar is not None and k % 4096 == 4095:
+                        bar.update(4096)
+                    if which == 0:
+                        gx, gy, gz = w_l[i]
+                        ax, ay, az = a_l[i]
+                        msg = Imu(
+                            header=header(i, t, frame_id),
+                            orientation=no_orientation,
+                            orientation_covariance=orient_cov,
+                            angular_velocity=Vector3(x=gx, y=gy, z=gz),
+                            angular_velocity_covariance=gyro_cov,
+                            linear_acceleration=Vector3(x=ax, y=ay, z=az),
+                            linear_acceleration_covariance=accel_cov,
+                        )
+                        writer.write(c_imu, t, serialize(msg, imu_type))
+                    else:
+                        px, py, pz = p_l[i]
+                        qx, qy, qz, qw = q_l[i]
+                        msg = PoseStamped(
+                            header=header(i, t, world_frame_id),
+                            pose=Pose(position=Point(x=px, y=py, z=pz),
+                                      orientation=Quaternion(x=qx, y=qy, z=qz, w=qw)),
+                        )
+                        writer.write(c_pose, t, serialize(msg, pose_type))
+            finally:
+                if bar is not None:
+                    bar.close()
     return path
+
+
+#: bags of at least this many messages get a progress bar (when stderr is a terminal)
+BAG_PROGRESS_MIN_MESSAGES = 100_000
+
+
+def _progress_bar(n, progress):
+    if progress is False or (progress is None and n < BAG_PROGRESS_MIN_MESSAGES):
+        return None
+    from tqdm import tqdm
+
+    return tqdm(total=n, unit=" messages", unit_scale=True, desc="bag", leave=False,
+                disable=None if progress is None else False)
