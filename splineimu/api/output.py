@@ -12,6 +12,7 @@ import platform
 import numpy as np
 
 from .. import __version__
+from ..io.progress import progress_bar
 from ..pipeline import TIMING_SEED_KEY, VIBRATION_SEED_KEY, SynthesisStream
 
 __all__ = ["write_output", "PROGRESS_MIN_SAMPLES"]
@@ -184,12 +185,7 @@ PROGRESS_MIN_SAMPLES = 1_000_000
 
 
 def _progress_bar(n, progress):
-    if progress is False or (progress is None and n < PROGRESS_MIN_SAMPLES):
-        return None
-    from tqdm import tqdm
-
-    return tqdm(total=n, unit=" samples", unit_scale=True, desc="writing", leave=False,
-                disable=None if progress is None else False)
+    return progress_bar(n, progress, PROGRESS_MIN_SAMPLES, " samples", "writing")
 
 
 def _json_default(o):

@@ -24,6 +24,7 @@ import numpy as np
 from ..errors import ConfigError, InputError, OutputExistsError
 from ..validation import as_float_array, as_quat_xyzw, as_stamps_ns, as_vectors, one_of
 from .files import staged_path
+from .progress import progress_bar
 
 __all__ = ["write_bag", "imu_covariances", "BAG_KINDS", "ROS2_BAG_VERSIONS", "ROS2_BAG_VERSION",
            "BAG_PROGRESS_MIN_MESSAGES"]
@@ -263,9 +264,4 @@ BAG_PROGRESS_MIN_MESSAGES = 100_000
 
 
 def _progress_bar(n, progress):
-    if progress is False or (progress is None and n < BAG_PROGRESS_MIN_MESSAGES):
-        return None
-    from tqdm import tqdm
-
-    return tqdm(total=n, unit=" messages", unit_scale=True, desc="bag", leave=False,
-                disable=None if progress is None else False)
+    return progress_bar(n, progress, BAG_PROGRESS_MIN_MESSAGES, " messages", "bag")
