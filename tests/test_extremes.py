@@ -78,8 +78,32 @@ def test_a_turn_of_179_degrees_between_poses_is_refused_naming_the_file(tmp_path
     rc = main(["from-tum", str(poses), "-o", str(tmp_path / "o")])
     err = capsys.readouterr().err
     assert rc == 1 and err.count("\n") == 1, err
-    assert err.startswith(f"splineimu from-tum: error: {poses}: ") and "rotate by 179.1 deg" in err, err
+    # and the line of the pose before the turn (no header: pose i is on line i + 1)
+    assert err.startswith(f"splineimu from-tum: error: {poses}:100: poses 99 and 100 "), err
+    assert "rotate by 179.1 deg" in err, err
     assert "Traceback" not in err and not (tmp_path / "o").exists()
+
+
+def test_a_refused_turn_after_dropped_flips_names_the_input_poses(tmp_path, capsys):
+    """With orientation flips dropped first, the refusal named the kept poses' positions
+    ('poses 99 and 100' in a file turning 170 deg every 10 ms, half of them dropped as flips),
+    which no line of the file matches; it names the input's poses and the line now."""
+    import numpy as np
+
+    from splineimu import fit
+    from splineimu.errors import InputError
+
+    t = np.arange(200) * 0.01
+    angle = np.radians(170.0) * np.arange(200)
+    q = np.column_stack([np.zeros((200, 2)), np.sin(angle / 2), np.cos(angle / 2)])
+    with pytest.raises(InputError) as exc:
+        fit(t, np.zeros((200, 3)), q)
+    kept = exc.value.pose_index
+    assert f"poses {kept} and " in str(exc.value) and kept >= 1
+    poses = _write_tum(tmp_path / "spin.tum", t, angle)
+    rc = main(["from-tum", str(poses), "-o", str(tmp_path / "o")])
+    err = capsys.readouterr().err
+    assert rc == 1 and err.startswith(f"splineimu from-tum: error: {poses}:{kept + 1}: poses {kept} and "), err
 
 
 def test_a_large_output_is_announced_with_its_size(tmp_path, capsys, monkeypatch):

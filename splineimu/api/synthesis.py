@@ -483,7 +483,9 @@ def _fit(job, track, log):
     except InputError as exc:  # the fit's refusals (a turn of 90 deg or more between poses) name the file
         if exc.path is not None or job.motion.path is None:
             raise
-        raise InputError(exc.problem, path=job.motion.path) from None
+        at = getattr(exc, "pose_index", None)  # and the line of the pose they name
+        line = None if at is None or track.line_numbers is None else int(track.line_numbers[at])
+        raise InputError(exc.problem, path=job.motion.path, line=line) from None
     for w in fit_warnings(rep):  # also in report.json and in the fit summary
         log.note(f"warning: {w['message']}")
     if rep.dropped_poses:

@@ -167,14 +167,18 @@ def rotation_flips(t, R):
     return flip
 
 
-def check_rotation_steps(t, R):
+def check_rotation_steps(t, R, index=None):
     """Refuse input whose consecutive poses rotate by more than :data:`MAX_STEP_ANGLE_RAD`.
 
     Across a gap (more than 3 median pose spacings) such a turn is not refused but returned as a
     warning: the fit bridges the gap with the shortest turn, which may not be what happened.
+    ``index``: the poses' indices in the caller's input (poses dropped before: orientation
+    flips); the refusal names those, and carries the first as ``pose_index`` (a command maps it
+    to the file's line).
     """
     if R.shape[0] < 2:
         return []
+    index = np.arange(t.size) if index is None else np.asarray(index)
     ang = _angle(R[:-1], R[1:])
     dt = np.diff(t)
     gap = dt > 3.0 * np.median(dt)
@@ -184,14 +188,18 @@ def check_rotation_steps(t, R):
         flip = np.flatnonzero(rotation_flips(t, R))
         if flip.size:
             a = int(flip[0])
-            raise InputError(
-                f"pose {a} (t = {t[a]:.6f} s) turns by {np.degrees(ang[a - 1]):.1f} deg away from the one before "
-                "and back: an orientation flip of the tracking; remove such poses, or fit with outlier rejection "
-                "(the default), which drops them")
-        raise InputError(
-            f"poses {i} and {i + 1} (t = {t[i]:.6f} s and {t[i + 1]:.6f} s) rotate by {np.degrees(ang[i]):.1f} deg: "
-            f"{np.degrees(MAX_STEP_ANGLE_RAD):.0f} deg or more between consecutive poses cannot be told from "
-            "the opposite turn; record or export the poses at a higher rate")
+            exc = InputError(
+                f"pose {index[a]} (t = {t[a]:.6f} s) turns by {np.degrees(ang[a - 1]):.1f} deg away from the one "
+                "before and back: an orientation flip of the tracking; remove such poses, or fit with outlier "
+                "rejection (the default), which drops them")
+            exc.pose_index = int(index[a])
+            raise exc
+        exc = InputError(
+            f"poses {index[i]} and {index[i + 1]} (t = {t[i]:.6f} s and {t[i + 1]:.6f} s) rotate by "
+            f"{np.degrees(ang[i]):.1f} deg: {np.degrees(MAX_STEP_ANGLE_RAD):.0f} deg or more between consecutive "
+            "poses cannot be told from the opposite turn; record or export the poses at a higher rate")
+        exc.pose_index = int(index[i])
+        raise exc
     return [FitWarning("gap_turn_ambiguous", f"the poses turn by {np.degrees(ang[i]):.0f} deg across the gap from "
                        f"{t[i]:.3f} s to {t[i + 1]:.3f} s: the fit bridges it with the shortest turn",
                        float(t[i]), float(t[i + 1])) for i in np.flatnonzero(big & gap)]

@@ -153,7 +153,7 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
     P = P - offset
     if np.count_nonzero(w) < 3:  # fewer leave the position's quadratic (the penalty's null space) free
         raise InputError(f"too few poses to fit: got {np.count_nonzero(w)} with a positive weight, need at least 3")
-    gap_warnings = check_rotation_steps(t, R)
+    gap_warnings = check_rotation_steps(t, R, np.flatnonzero(~flips))
     given = (r_order, r_dt, p_order, p_dt)
     if "auto" in given:
         check_stamp_clusters(t)
