@@ -113,10 +113,9 @@ def stamp_clock(imu_csv, time_offset_s: float | None = None, clock_drift_ppm: fl
     """
     from ..imu.timing import TimingModel
 
-    keys = _KEYS
-    given = {k: finite_float(v, k) for k, v in zip(keys, (time_offset_s, clock_drift_ppm)) if v is not None}
+    given = {k: finite_float(v, k) for k, v in zip(_KEYS, (time_offset_s, clock_drift_ppm)) if v is not None}
     recorded, report = ({}, None) if len(given) == 2 else recorded_timing(imu_csv)
-    values = {k: given.get(k, recorded.get(k, 0.0)) for k in keys}
+    values = {k: given.get(k, recorded.get(k, 0.0)) for k in _KEYS}
     try:
         clock = TimingModel(**values)
     except ConfigError as exc:
@@ -130,7 +129,7 @@ def stamp_clock(imu_csv, time_offset_s: float | None = None, clock_drift_ppm: fl
                  "drift are undone",)
     if clock.is_identity:
         return StampClock(notes=notes)
-    from_report = any(recorded.get(k) for k in keys if k not in given)
+    from_report = any(recorded.get(k) for k in _KEYS if k not in given)
     source = str(report) if from_report else "given"
     if from_report and any(given.values()):
         source += " and as given"

@@ -484,7 +484,7 @@ def _fit(job, track, log):
         if exc.path is not None or job.motion.path is None:
             raise
         at = getattr(exc, "pose_index", None)  # and the line of the pose they name
-        line = None if at is None or track.line_numbers is None else int(track.line_numbers[at])
+        line = None if at is None else int(track.line_numbers[at])
         raise InputError(exc.problem, path=job.motion.path, line=line) from None
     for w in fit_warnings(rep):  # also in report.json and in the fit summary
         log.note(f"warning: {w['message']}")

@@ -187,17 +187,16 @@ def check_rotation_steps(t, R, index=None):
         i = int(np.argmax(np.where(gap, 0.0, ang)))
         flip = np.flatnonzero(rotation_flips(t, R))
         if flip.size:
-            a = int(flip[0])
-            exc = InputError(
-                f"pose {index[a]} (t = {t[a]:.6f} s) turns by {np.degrees(ang[a - 1]):.1f} deg away from the one "
-                "before and back: an orientation flip of the tracking; remove such poses, or fit with outlier "
-                "rejection (the default), which drops them")
-            exc.pose_index = int(index[a])
-            raise exc
-        exc = InputError(
-            f"poses {index[i]} and {index[i + 1]} (t = {t[i]:.6f} s and {t[i + 1]:.6f} s) rotate by "
-            f"{np.degrees(ang[i]):.1f} deg: {np.degrees(MAX_STEP_ANGLE_RAD):.0f} deg or more between consecutive "
-            "poses cannot be told from the opposite turn; record or export the poses at a higher rate")
+            i = int(flip[0])
+            message = (f"pose {index[i]} (t = {t[i]:.6f} s) turns by {np.degrees(ang[i - 1]):.1f} deg away from "
+                       "the one before and back: an orientation flip of the tracking; remove such poses, or fit "
+                       "with outlier rejection (the default), which drops them")
+        else:
+            message = (f"poses {index[i]} and {index[i + 1]} (t = {t[i]:.6f} s and {t[i + 1]:.6f} s) rotate by "
+                       f"{np.degrees(ang[i]):.1f} deg: {np.degrees(MAX_STEP_ANGLE_RAD):.0f} deg or more between "
+                       "consecutive poses cannot be told from the opposite turn; record or export the poses at a "
+                       "higher rate")
+        exc = InputError(message)
         exc.pose_index = int(index[i])
         raise exc
     return [FitWarning("gap_turn_ambiguous", f"the poses turn by {np.degrees(ang[i]):.0f} deg across the gap from "
