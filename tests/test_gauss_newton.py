@@ -11,6 +11,7 @@ from splineimu import lie
 from splineimu._kernels import fit as _kf
 from splineimu._kernels import gauss_newton as _gn
 from splineimu.spline import banded
+from splineimu.spline.banded import segments
 from splineimu.spline.basis import blending_matrix
 from splineimu.spline.controls import _increments_so3
 from splineimu.spline.problem import _quasi_interpolant
@@ -40,7 +41,8 @@ def _new(Rc, s, Rm, w, k, nseg, want_h=True):
     band = np.zeros((3 * n, 3 * k))
     g = np.zeros((n, 3))
     res = np.empty((s.size, 3))
-    cost = _gn.so3_pass(s, w, _wxyz(Rm), qc, D, C, blending_matrix(k, True), nseg, want_h, band, g, res)
+    cost = _gn.so3_pass(*segments(s, 0.0, 1.0), w, _wxyz(Rm), qc, D, C, blending_matrix(k, True), nseg, want_h,
+                        band, g, res)
     return cost, band, g, res, D, C
 
 
@@ -49,7 +51,8 @@ def _old(Rc, s, Rm, w, k, nseg):
     H = np.zeros((n, k, 3, 3))
     g = np.zeros((n, 3))
     res = np.empty((s.size, 3))
-    cost = _kf.so3_normal_equations(s, w, Rm, Rc, _increments_so3(Rc), blending_matrix(k, True), nseg, H, g, res)
+    cost = _kf.so3_normal_equations(*segments(s, 0.0, 1.0), w, Rm, Rc, _increments_so3(Rc), blending_matrix(k, True),
+                                    nseg, H, g, res)
     band = np.zeros((3 * n, 3 * k))
     _kf.blocks_to_band(H, band)
     return cost, band, g, res

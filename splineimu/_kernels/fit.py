@@ -29,7 +29,7 @@ from .lie import (
     so3_jacobian_inv_into,
     so3_log_into,
 )
-from .spline import _segment, basis_into
+from .spline import _segment_of, basis_into
 
 
 @jit
@@ -76,12 +76,12 @@ def _add_product(X, B, E, out, sign):
 
 
 @jit
-def position_residuals(s_all, P_meas, Pc, M_plain, nseg, out):
+def position_residuals(seg_all, u_all, P_meas, Pc, M_plain, nseg, out):
     k = M_plain.shape[0]
     b = np.empty(k)
     bd = np.empty(k)
-    for m in range(s_all.shape[0]):
-        seg, u = _segment(s_all[m], nseg)
+    for m in range(seg_all.shape[0]):
+        seg, u = _segment_of(seg_all[m], u_all[m], nseg)
         basis_into(M_plain, u, 1.0, b, bd, bd)
         for d in range(3):
             acc = 0.0
@@ -91,7 +91,7 @@ def position_residuals(s_all, P_meas, Pc, M_plain, nseg, out):
 
 
 @jit
-def so3_normal_equations(s_all, w_all, R_meas, Rc, D, Mc, nseg, H, g, res):
+def so3_normal_equations(seg_all, u_all, w_all, R_meas, Rc, D, Mc, nseg, H, g, res):
     """Gauss-Newton blocks for rotation residuals. H (n, k, 3, 3), g (n, 3), res (M, 3) out.
 
     Returns the weighted cost sum w |r|^2. The reference implementation (matrices, the exact
@@ -115,8 +115,8 @@ def so3_normal_equations(s_all, w_all, R_meas, Rc, D, Mc, nseg, H, g, res):
     Jm = np.empty((k, 3, 3))
     X = np.empty((3, 3))
     cost = 0.0
-    for m in range(s_all.shape[0]):
-        seg, u = _segment(s_all[m], nseg)
+    for m in range(seg_all.shape[0]):
+        seg, u = _segment_of(seg_all[m], u_all[m], nseg)
         basis_into(Mc, u, 1.0, b, bd, bd)
         for j in range(1, k):
             so3_exp_into(b[j] * D[seg + j, 0], b[j] * D[seg + j, 1], b[j] * D[seg + j, 2], A[j])
@@ -177,7 +177,7 @@ def _adj_inv_into(R, t, Ad, RT, tt):
 
 
 @jit
-def se3_normal_equations(s_all, w6, R_meas, p_meas, Rc, pc, D, Mc, nseg, H, g, res):
+def se3_normal_equations(seg_all, u_all, w6, R_meas, p_meas, Rc, pc, D, Mc, nseg, H, g, res):
     """Gauss-Newton blocks for SE3 residuals ``Log(T(t)^-1 T_meas)`` = [rho, phi].
 
     w6 (M, 6) diagonal weights, equal within the translation rows and within the rotation rows.
@@ -210,8 +210,8 @@ def se3_normal_equations(s_all, w6, R_meas, p_meas, Rc, pc, D, Mc, nseg, H, g, r
     G = np.empty((k, 6, 6))
     Jm = np.empty((k, 6, 6))
     cost = 0.0
-    for m in range(s_all.shape[0]):
-        seg, u = _segment(s_all[m], nseg)
+    for m in range(seg_all.shape[0]):
+        seg, u = _segment_of(seg_all[m], u_all[m], nseg)
         basis_into(Mc, u, 1.0, b, bd, bd)
         for j in range(1, k):
             for z in range(6):
@@ -274,7 +274,7 @@ def se3_normal_equations(s_all, w6, R_meas, p_meas, Rc, pc, D, Mc, nseg, H, g, r
 
 # ------------------------------------------------------------------- cross-validation
 @jit
-def fold_normal_equations(s_all, w_all, fold, X, M, nseg, H, rhs):
+def fold_normal_equations(seg_all, u_all, w_all, fold, X, M, nseg, H, rhs):
     """Per-fold contributions of an ordinary B-spline fit of ``X`` (N, d).
 
     ``fold`` (N,) int in [0, F); H (F, n, k) banded scalar blocks and rhs (F, n, d) receive the
@@ -284,8 +284,8 @@ def fold_normal_equations(s_all, w_all, fold, X, M, nseg, H, rhs):
     d = X.shape[1]
     b = np.empty(k)
     bd = np.empty(k)
-    for m in range(s_all.shape[0]):
-        seg, u = _segment(s_all[m], nseg)
+    for m in range(seg_all.shape[0]):
+        seg, u = _segment_of(seg_all[m], u_all[m], nseg)
         basis_into(M, u, 1.0, b, bd, bd)
         f = fold[m]
         w = w_all[m]

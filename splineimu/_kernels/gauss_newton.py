@@ -28,7 +28,7 @@ import numpy as np
 
 from .._jit import jit
 from .lie import JAC_SMALL_ANGLE, _i_plus_bk_ck2_into, so3_jacobian_inv_into
-from .spline import _segment
+from .spline import _segment_of
 
 
 @jit(inline="always")
@@ -233,7 +233,7 @@ def _extrapolate(F, i, i1, i2):
 
 
 @jit
-def so3_pass(s_all, w_all, q_meas, qc, D, C, Mc, nseg, want_h, band, g, res):
+def so3_pass(seg_all, u_all, w_all, q_meas, qc, D, C, Mc, nseg, want_h, band, g, res):
     """One pass over the poses: residuals into ``res`` (N, 3), ``g`` (n, 3) += gradient
     ``sum w J^T r`` and, if ``want_h``, ``band`` (3 n, 3 k) += ``sum w G^T G``. Returns the cost
     ``sum w |r|^2``. ``q_meas`` (N, 4) and ``qc`` (n, 4) unit quaternions (w, x, y, z); ``D``, ``C``
@@ -253,8 +253,8 @@ def so3_pass(s_all, w_all, q_meas, qc, D, C, Mc, nseg, want_h, band, g, res):
     A = np.empty((3, 3))
     J = np.empty((3, 3))
     cost = 0.0
-    for m in range(s_all.shape[0]):
-        seg, u = _segment(s_all[m], nseg)
+    for m in range(seg_all.shape[0]):
+        seg, u = _segment_of(seg_all[m], u_all[m], nseg)
         for j in range(k):
             acc = Mc[j, k - 1]
             for p in range(k - 2, -1, -1):

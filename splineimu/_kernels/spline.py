@@ -44,6 +44,17 @@ def _segment(s, nseg):
 
 
 @jit
+def _segment_of(seg, u, nseg):
+    """:func:`_segment` of a parameter given as its segment and the fraction within it (from
+    :func:`splineimu.spline.banded.segments`): clamped to [0, nseg - 1], u continued past."""
+    if seg < 0:
+        return 0, u + seg
+    if seg > nseg - 1:
+        return nseg - 1, u + (seg - (nseg - 1))
+    return seg, u
+
+
+@jit
 def basis_into(M, u, inv_dt, b, bd, bdd):
     """The one basis evaluation of every kernel: ``b = M [1, u, .., u^(k-1)]`` and its first and
     second time derivatives (``d/du`` scaled by ``inv_dt`` per order) into ``b, bd, bdd`` (k,).

@@ -13,6 +13,7 @@ import numpy as np
 
 from .._kernels import fit as _kf
 from .._kernels import gauss_newton as _gn
+from ..exactfloat import two_product
 
 #: Relative weight of the default smoothness penalty where data are dense (negligible bias).
 DEFAULT_SMOOTHNESS = 1e-10
@@ -75,6 +76,30 @@ def layout(t_first, t_last, knot_spacing_s, order):
     nseg = max(1, int(round(span / float(knot_spacing_s))))
     dt = span / nseg if span > 0 else float(knot_spacing_s)
     return float(t_first), dt, nseg, nseg + order - 1
+
+
+def segments(t, t0, dt):
+    """Segment index (int64) and the fraction u in [0, 1] of the knot spacing within it, of
+    times ``t`` on the knots ``t0 + i dt``, without the rounding of ``s = (t - t0) / dt``: s
+    held in one float has steps of 1.2e-10 at 6.5e5 segments (an hour at 5.5 ms), which moves
+    each pose by 6e-13 s, for 6 m/s a position error of 4e-12 m; the fit passed that to the
+    accelerometer (exact ellipse poses, 1 minute with such jitter: 3.8e-9 -> 2.4e-8 m/s^2)."""
+    t = np.asarray(t, dtype=np.float64)
+    seg = np.floor((t - t0) / dt)
+    # r = t - t0 - seg dt, with t - t0 and seg dt each carried as two floats
+    a = t - t0
+    back = a - t
+    a_lo = (t - (a - back)) + (-t0 - back)  # the rounding of t - t0 (Knuth's two-sum)
+    p, e = two_product(seg, dt)
+    r = ((a - p) - e) + a_lo
+    u = r / dt
+    seg = seg.astype(np.int64)
+    low, high = u < 0.0, u >= 1.0
+    seg[low] -= 1
+    u[low] += 1.0
+    seg[high] += 1
+    u[high] -= 1.0
+    return seg, u
 
 
 class BandSolver:

@@ -12,7 +12,7 @@ import numpy as np
 from .. import lie
 from .._kernels import fit as _kf
 from .._kernels import gauss_newton as _gn
-from .banded import SPARSE_SMOOTHNESS, BandSolver, add_position_penalty, row_weights, solve_banded_scalar
+from .banded import SPARSE_SMOOTHNESS, BandSolver, add_position_penalty, row_weights, segments, solve_banded_scalar
 from .basis import blending_matrix
 from .controls import _increments_se3, _to_matrices, _to_quats
 
@@ -76,6 +76,7 @@ class _Problem:
         self.order, self.t0, self.dt, self.nseg = order, t0, dt, nseg
         self.n = nseg + order - 1
         self.s = np.ascontiguousarray((t - t0) / dt)
+        self.seg, self.u = segments(t, t0, dt)  # the kernels' parameter, without the rounding of s
         self.M, self.Mc = (m.copy() for m in _blending(order))
         self.smoothness = smoothness
         self.w_rot = w_rot
@@ -101,7 +102,7 @@ class _Problem:
         Hs = np.zeros((n, k))
         rhs = np.zeros((n, 3))
         w = self.w * self.w_pos
-        _kf.fold_normal_equations(self.s, w, np.zeros(self.t.size, dtype=np.int64), self.P, self.M, self.nseg,
+        _kf.fold_normal_equations(self.seg, self.u, w, np.zeros(self.t.size, dtype=np.int64), self.P, self.M, self.nseg,
                                   Hs[None], rhs[None])
         r = min(3, k - 1)
         add_position_penalty(Hs, self._mu(r + 1) * self.w_pos, r)
@@ -109,7 +110,7 @@ class _Problem:
 
     def position_residuals(self, Pc):
         out = np.empty((self.t.size, 3))
-        _kf.position_residuals(self.s, self.P, Pc, self.M, self.nseg, out)
+        _kf.position_residuals(self.seg, self.u, self.P, Pc, self.M, self.nseg, out)
         return out
 
     # ------------------------------------------------------------------ rotation (split)
@@ -122,7 +123,7 @@ class _Problem:
         g = np.zeros((n, 3))
         res = np.empty((self.t.size, 3))
         w = self.w * self.w_rot
-        cost = _gn.so3_pass(self.s, w, self.q, qc, D, C, self.Mc, self.nseg, want_h, band, g, res)
+        cost = _gn.so3_pass(self.seg, self.u, w, self.q, qc, D, C, self.Mc, self.nseg, want_h, band, g, res)
         Cl = np.ascontiguousarray(np.swapaxes(C, 1, 2))  # Jl^-1(d) = Jr^-1(d)^T
         cost += _gn.increment_penalty(D, C, Cl, self._penalty_weights(1.0), want_h, band, g)
         return cost, (band if want_h else None), g, res
@@ -150,7 +151,7 @@ class _Problem:
         if seg0 > 0:
             i1 = self.s.size
         sl = slice(i0, i1)
-        s_sub = self.s[sl] - seg0
+        seg_sub, u_sub = self.seg[sl] - seg0, self.u[sl]
         w = self.w[sl] * self.w_rot
         mu = self._penalty_weights(1.0)[seg0: seg0 + ns - 2]
         free = slice(0, 3 * m) if seg0 == 0 else slice(3 * (k - 1), 3 * ns)
@@ -162,8 +163,8 @@ class _Problem:
             _gn.so3_knot_terms(q_sub, D, C)
             band = np.zeros((3 * ns, 3 * k))
             g = np.zeros((ns, 3))
-            cost = _gn.so3_pass(s_sub, w, self.q[sl], q_sub, D, C, self.Mc, m, True, band, g,
-                                np.empty((s_sub.size, 3)))
+            cost = _gn.so3_pass(seg_sub, u_sub, w, self.q[sl], q_sub, D, C, self.Mc, m, True, band, g,
+                                np.empty((u_sub.size, 3)))
             cost += _gn.increment_penalty(D, C, np.ascontiguousarray(np.swapaxes(C, 1, 2)), mu, True, band, g)
             if not cost < cost_prev:
                 break
@@ -208,7 +209,7 @@ class _Problem:
         g = np.zeros((n, 6))
         res = np.empty((self.t.size, 6))
         w6 = np.ascontiguousarray(np.column_stack([self.w * self.w_pos] * 3 + [self.w * self.w_rot] * 3))
-        cost = _kf.se3_normal_equations(self.s, w6, self.R, self.P, Rc, pc, D, self.Mc, self.nseg, H, g, res)
+        cost = _kf.se3_normal_equations(self.seg, self.u, w6, self.R, self.P, Rc, pc, D, self.Mc, self.nseg, H, g, res)
         band = np.zeros((6 * n, 6 * k))
         _kf.blocks_to_band(H, band)
         Jr_inv = np.zeros((n, 6, 6))
