@@ -2,14 +2,20 @@
 
 from __future__ import annotations
 
+from fractions import Fraction
+
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from conftest import require_shared
 
 from splineimu import Spline, SplineImuError, fit, lie
+from splineimu.exactfloat import turn
 from splineimu._kernels import fit as _kf
 from splineimu.errors import InputError
 from splineimu.scenes import make_scene
+from splineimu.spline.banded import segments
 from splineimu.spline.basis import blending_matrix
 from splineimu.spline.controls import _increments_se3, _increments_so3
 
@@ -53,8 +59,8 @@ def _so3_cost(Rc, s, Rm, k, nseg):
     H = np.zeros((n, k, 3, 3))
     g = np.zeros((n, 3))
     res = np.empty((s.size, 3))
-    c = _kf.so3_normal_equations(s, np.ones(s.size), Rm, Rc, _increments_so3(Rc), blending_matrix(k, True),
-                                 nseg, H, g, res)
+    c = _kf.so3_normal_equations(*segments(s, 0.0, 1.0), np.ones(s.size), Rm, Rc, _increments_so3(Rc),
+                                 blending_matrix(k, True), nseg, H, g, res)
     return c, g
 
 
@@ -81,8 +87,8 @@ def _se3_cost(Rc, pc, s, Rm, pm, k, nseg):
     g = np.zeros((n, 6))
     res = np.empty((s.size, 6))
     w6 = np.ones((s.size, 6))
-    c = _kf.se3_normal_equations(s, w6, Rm, pm, Rc, pc, _increments_se3(Rc, pc), blending_matrix(k, True),
-                                 nseg, H, g, res)
+    c = _kf.se3_normal_equations(*segments(s, 0.0, 1.0), w6, Rm, pm, Rc, pc, _increments_se3(Rc, pc),
+                                 blending_matrix(k, True), nseg, H, g, res)
     return c, g
 
 
@@ -389,3 +395,32 @@ def test_position_order_2_is_warned_about():
     assert "order_too_low" in [w.code for w in rep.warnings]
     _, rep = fit(t, p, q, order=3, knot_spacing_s=0.05, return_report=True)
     assert "order_too_low" not in [w.code for w in rep.warnings]
+
+
+# exact rational 2 pi to 60 digits, for the reference values below
+_TWO_PI = Fraction("6.283185307179586476925286766559005768394338798750211641949889")
+
+
+@settings(max_examples=200, deadline=None)
+@given(t=st.floats(0.0, 4e5), t0=st.floats(-10.0, 1e4), dt=st.floats(1e-4, 10.0))
+def test_spline_parameter_is_split_without_rounding(t, t0, dt):
+    """The fit's parameter: segment and fraction exact to a few units in the fraction's last
+    place, where (t - t0) / dt in one float rounds by up to 4e-11 of a spacing at 4e5 s."""
+    seg, u = segments(np.array([t]), t0, dt)
+    exact = (Fraction(t) - Fraction(t0)) / Fraction(dt)
+    assert 0.0 <= u[0] <= 1.0  # 1.0: a fraction just below 1 rounds up (the same point of the spline)
+    assert abs(Fraction(float(u[0])) + int(seg[0]) - exact) <= 4e-16 + 1e-16 * abs(float(exact)) / 2**26
+
+
+@settings(max_examples=200, deadline=None)
+@given(rate=st.floats(-30.0, 30.0), t=st.floats(0.0, 1e5), phase=st.floats(-4.0, 4.0))
+def test_scene_angles_are_reduced_without_rounding(rate, t, phase):
+    """rate t + phase modulo 2 pi to ~1e-15 rad plus 1e-19 of rate t (the 2 pi multiples taken
+    off; 4e-16 rad for an hour at 1 rad/s); the float product alone is off by up to 1e-16 of
+    rate t (4e-13 rad there)."""
+    got = turn(rate, np.array([t]), phase)[0]
+    exact = Fraction(rate) * Fraction(t) + Fraction(phase)
+    off = Fraction(float(got)) - exact
+    off -= round(off / _TWO_PI) * _TWO_PI
+    assert abs(float(off)) <= 2e-15 + 1e-19 * abs(rate * t)
+    assert abs(got) <= np.pi + 4.5

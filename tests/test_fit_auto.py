@@ -246,17 +246,18 @@ def test_one_hour_is_as_good_as_one_minute():
 
 
 @pytest.mark.slow
-def test_one_hour_of_exact_poses_stays_at_rounding_level():
-    """Exact ellipse poses. The gyro of the hour is as good as the minute's (measured 1.3e-9
-    against 1.1e-8 rad/s: the rotation signal is summed from zero in each cross-validated
-    window; summed over the hour its rounding, ~1e-13 rad a step, read as noise and gave 21 ms
-    knots and 4.9e-8). The accel is limited by the scene's own float64 rounding, which grows
-    with time (sin(w t) at t = 3600 s: ~4e-13 m of position jitter; float64 seconds at 3600 s
-    are 4.5e-13 s apart): 9.6e-8 m/s^2 at 1 h against 3.7e-9 at 1 min (1.3e-7 before the grid
-    past 2 s and the 135-degree turn limit); the best fixed setting at 1 h reaches 2.1e-8 (order
-    6, 11 ms), 6x the minute, so no spacing meets 2x on exact input (a known gap, kept visible)."""
+def test_one_hour_of_exact_poses_is_as_good_as_one_minute():
+    """Exact ellipse poses: the hour's IMU errors are the minute's (issue 13, item 5: within 2x).
+    Measured gyro 1.14e-8 against 1.14e-8 rad/s, accel 3.2e-9 against 3.7e-9 m/s^2. Two float
+    roundings that grow with time held the hour at 9.6e-8 m/s^2 (26x): the spline parameter ``s
+    = (t - t0) / dt`` in one float (steps of 1.2e-10 at 6.5e5 segments: each pose moved by 6e-13
+    s; now the segment and the fraction, :func:`splineimu.spline.banded.segments`) and the
+    scene's own ``sin(K t)`` (``K t`` rounded by 2e-13 rad at 3600 s: 1e-12 m of noise on the
+    positions; now reduced exactly, :mod:`splineimu.exactfloat`). Earlier, the rotation signal
+    summed over the hour read its rounding as noise (21 ms knots, gyro 4.9e-8); it is summed
+    from zero in each cross-validated window."""
     errs = {dur: imu_errors(fit(*poses("clean", dur)), dur) for dur in (60.0, 3600.0)}
-    assert errs[3600.0][0] <= 2.0 * errs[60.0][0] and errs[3600.0][1] <= 3e-7, errs
+    assert errs[3600.0][0] <= 2.0 * errs[60.0][0] and errs[3600.0][1] <= 2.0 * errs[60.0][1], errs
     assert errs[60.0][0] <= 3e-8 and errs[60.0][1] <= 1e-8, errs
 
 

@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..exactfloat import turn
+
 __all__ = ["euler_zyx_kinematics", "rotation_z", "sum_of_sines"]
 
 
@@ -103,7 +105,7 @@ def sum_of_sines(t, table, scale=1.0):
     dx = np.zeros_like(t)
     ddx = np.zeros_like(t)
     for amp, om, ph in table:
-        arg = om * t + ph
+        arg = turn(om, t, ph)
         s, c = np.sin(arg), np.cos(arg)
         x += amp * s
         dx += amp * om * c

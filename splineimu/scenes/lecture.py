@@ -13,6 +13,7 @@ import math
 
 import numpy as np
 
+from ..exactfloat import turn
 from .base import Param, Scene, register_scene
 from .kinematics import euler_zyx_kinematics, rotation_z
 
@@ -54,9 +55,11 @@ class EllipseScene(Scene):
         K = self.params["k_rad_s"]
         K1 = self.params["k1"]
         n = t.shape[0]
-        c, s = np.cos(K * t), np.sin(K * t)
+        lap = turn(K, t)  # K t, reduced without its rounding (exactfloat)
+        c, s = np.cos(lap), np.sin(lap)
         w1 = K1 * K
-        cz, sz = np.cos(w1 * t), np.sin(w1 * t)
+        wob = turn(w1, t)
+        cz, sz = np.cos(wob), np.sin(wob)
         p = np.empty((n, 3))
         v = np.empty((n, 3))
         a = np.empty((n, 3))
@@ -71,7 +74,7 @@ class EllipseScene(Scene):
         a[:, 2] = -w1 * w1 * sz
 
         ct, st = np.cos(t), np.sin(t)
-        ang = np.stack([0.1 * ct, 0.2 * st, K * t], axis=1)
+        ang = np.stack([0.1 * ct, 0.2 * st, lap], axis=1)
         rates = np.stack([-0.1 * st, 0.2 * ct, np.full(n, K)], axis=1)
         accs = np.stack([-0.1 * ct, -0.2 * st, np.zeros(n)], axis=1)
         R, w, al = euler_zyx_kinematics(ang, rates, accs)
@@ -161,7 +164,7 @@ class CircleScene(Scene):
     def _evaluate(self, t):
         r = self.params["radius_m"]
         w = self.params["speed_m_s"] / r
-        th = self.params["phase_rad"] + w * t
+        th = turn(w, t, self.params["phase_rad"])
         c, s = np.cos(th), np.sin(th)
         n = t.shape[0]
         p = np.empty((n, 3))

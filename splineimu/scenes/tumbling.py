@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..exactfloat import turn
 from .base import Param, Scene, register_scene
 from .kinematics import euler_zyx_kinematics, sum_of_sines
 
@@ -166,7 +167,7 @@ class FlipsScene(Scene):
         a = np.empty((n, 3))
         for i in range(3):
             x, dx, ddx = sum_of_sines(t, _FLIPS_ANGLE_SINES[i], sw)
-            ang[:, i] = W[i] * t + x
+            ang[:, i] = turn(W[i], t) + x
             rates[:, i] = W[i] + dx
             accs[:, i] = ddx
             x, dx, ddx = sum_of_sines(t, _FLIPS_POSITION_SINES[i], ss)
