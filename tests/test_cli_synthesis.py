@@ -387,3 +387,34 @@ def test_tum_file_inside_the_output_folder_is_refused(tmp_path, capsys):
         assert not out.exists()
     assert main(["scene", "static", "--duration", "1", "-o", str(out), "--tum", str(tmp_path / "poses.tum")]) == 0
     assert (tmp_path / "poses.tum").is_file() and (out / "groundtruth.tum").is_file()
+
+
+def test_trim_ends_leaves_the_one_sided_ends_out(tmp_path, capsys):
+    """--trim-ends auto: the record starts and ends the fit's end zones (k knot spacings) inside
+    the poses, on the untrimmed record's grid, and the ends warning is gone with the ends.
+    Exact ellipse poses at 2 Hz: accel error over the whole record 0.63 m/s^2 (the ends 2.4),
+    trimmed 0.031 m/s^2."""
+    sc = make_scene("ellipse", duration_s=60.0, t0_ns=1_700_000_000_000_000_000)
+    path = tmp_path / "ell2.tum"
+    assert run_cli("scene", "ellipse", "--duration", 60, "--rate", 2, "--t0-ns", sc.origin_ns, "--tum", path) == 0
+    errs = {}
+    for trim in ("0", "auto"):
+        out = tmp_path / f"out{trim}"
+        assert run_cli("from-tum", path, "-o", out, "--trim-ends", trim) == 0
+        rep = json.loads((out / "report.json").read_text())
+        codes = [w["code"] for w in rep["warnings"]]
+        t_ns, _, f = read_imu(out / "mav0/imu0/data.csv")
+        errs[trim] = float(np.sqrt(np.mean(np.sum((f - sc.imu(sc.t_s_from_ns(t_ns))[1]) ** 2, axis=1))))
+        if trim == "0":
+            assert "ends_less_accurate" in codes and t_ns[0] == sc.origin_ns
+            continue
+        zone = max(rep["spline"]["knot_choice"][key]["end_zone_s"] for key in ("rotation", "position"))
+        assert rep["spline"]["trimmed_ends_s"] >= zone * 0.99 and "ends_less_accurate" not in codes, rep["warnings"]
+        first = (t_ns[0] - sc.origin_ns) / 1e9
+        assert zone * 0.99 <= first <= rep["spline"]["trimmed_ends_s"] + 0.005  # on the 200 Hz grid from t0:
+        assert (t_ns[0] - sc.origin_ns) % 5_000_000 == 0
+        assert (sc.origin_ns + 60_000_000_000 - t_ns[-1]) / 1e9 >= zone * 0.99
+        assert "trimmed" in capsys.readouterr().out
+    assert errs["auto"] < 0.2 * errs["0"], errs
+    assert run_cli("from-tum", path, "-o", tmp_path / "none", "--trim-ends", 31) == 1
+    assert "`--trim-ends` = 31 s at each end leaves nothing of the 60 s of poses" in capsys.readouterr().err

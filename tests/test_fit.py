@@ -6,14 +6,14 @@ from fractions import Fraction
 
 import numpy as np
 import pytest
+from conftest import require_shared
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from conftest import require_shared
 
 from splineimu import Spline, SplineImuError, fit, lie
-from splineimu.exactfloat import turn
 from splineimu._kernels import fit as _kf
 from splineimu.errors import InputError
+from splineimu.exactfloat import turn
 from splineimu.scenes import make_scene
 from splineimu.spline.banded import segments
 from splineimu.spline.basis import blending_matrix

@@ -24,8 +24,6 @@ splineimu.errors.ConfigError: `rate_hz` must be positive, got -1
 
 from __future__ import annotations
 
-import dataclasses
-import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -40,23 +38,7 @@ from ..validation import (
     one_of,
     positive_float,
 )
-
-#: The command-line flag of each option field (positional arguments in capitals).
-FLAGS = {
-    "rate_hz": "--rate", "timestamps": "--timestamps", "model": "--imu", "extrinsic": "--extrinsic",
-    "gravity": "--gravity", "sampling": "--sampling", "increments": "--increments", "seed": "--seed",
-    "rostopic": "--rostopic", "bag_version": "--bag-version",
-    "kind": "--spline", "order": "--order", "knot_spacing_s": "--knot-spacing", "smoothness": "--smoothness",
-    "keep_outliers": "--keep-outliers",
-    "path": "POSES", "format": "COMMAND", "repeated_stamps": "--repeated-stamps", "max_gap_s": "--max-gap",
-    "gaps": "--gaps",
-    "name": "SCENE", "duration_s": "--duration", "t0_ns": "--t0-ns", "params": "--param",
-    "dir": "--out", "force": "--force", "bag": "--bag", "plot": "--plot", "tum": "--tum",
-    "vibration": "--vibration", "timing": "--time-offset/--clock-drift-ppm/--stamp-noise/--drop-probability",
-    "timing.time_offset_s": "--time-offset", "timing.clock_drift_ppm": "--clock-drift-ppm",
-    "timing.stamp_noise_s": "--stamp-noise", "timing.drop_probability": "--drop-probability",
-    "timing.drop_burst_s": "--drop-burst",
-}
+from .argv import FLAGS, SPLINE_FIELDS, job_argv
 
 DEFAULT_GRAVITY = (0.0, 0.0, -9.81)
 
@@ -324,6 +306,10 @@ class SplineOptions(_Checked):
         Relative weight of the smoothness penalty (the fit's default when None).
     keep_outliers : bool
         Keep poses whose fit residual is beyond 8 robust sigmas.
+    trim_ends_s : float or "auto"
+        Time [s] at each end of the poses left out of the synthesized record (default 0);
+        ``"auto"``: the fit's end zones (order x knot spacing of either grid: the fit sees
+        one-sided data there, see the ``ends_less_accurate`` warning).
     """
 
     kind: str = "split"
@@ -331,6 +317,7 @@ class SplineOptions(_Checked):
     knot_spacing_s: object = "auto"
     smoothness: float | None = None
     keep_outliers: bool = False
+    trim_ends_s: object = 0.0
     origin: Origin | None = _origin_field()
 
     def __post_init__(self):
@@ -346,6 +333,15 @@ class SplineOptions(_Checked):
             name, kw = self._kw("smoothness")
             self.smoothness = nonnegative_float(self.smoothness, name, **kw)
         self.keep_outliers = self._bool("keep_outliers")
+        name, kw = self._kw("trim_ends_s")
+        self.trim_ends_s = _auto_or(self.trim_ends_s, lambda v: nonnegative_float(v, name, **kw))
+
+    def trim_s(self, fit_report) -> float:
+        """The time [s] left out at each end of a piece fitted as ``fit_report`` says."""
+        if self.trim_ends_s != "auto":
+            return float(self.trim_ends_s)
+        r = fit_report
+        return float(max(r.order * r.knot_spacing_s, (r.position_order or 0) * (r.position_knot_spacing_s or 0.0)))
 
 
 @dataclass
@@ -535,66 +531,8 @@ class SynthesisJob:
         ConfigError
             The job has cameras: they have no flags (scene files only).
         """
-        if self.cameras is not None:
-            raise ConfigError("cameras are only available from scene files: no command line gives this job",
-                              option="cameras")
-        m = self.motion
-        if isinstance(m, PosesInput):
-            argv = ["from-tum" if m.format == "tum" else "from-euroc", m.path]
-            argv += _flags(m.spline, ("kind", "order", "knot_spacing_s", "smoothness", "keep_outliers"))
-            argv += _flags(m, ("repeated_stamps", "max_gap_s", "gaps"))
-        else:
-            argv = ["scene", m.name] + _flags(m, ("duration_s", "t0_ns"))
-            for k, v in m.params.items():
-                argv += ["--param", f"{k}={','.join(map(_num, v)) if isinstance(v, list) else _num(v)}"]
-        argv += _flags(self.imu, ("rate_hz", "timestamps", "model", "extrinsic", "gravity", "sampling",
-                                  "increments", "seed", "rostopic"))
-        if self.imu.timing is not None:
-            argv += [x for k, v in self.imu.timing.to_dict().items() for x in (FLAGS[f"timing.{k}"], _num(v))]
-        if self.imu.vibration is not None:
-            argv += [FLAGS["vibration"], json.dumps(self.imu.vibration.to_dict())]
-        if self.output.dir is not None:
-            argv += ["-o", self.output.dir]
-        argv += _flags(self.output, ("force", "bag", "plot", "tum", "bag_version"))
-        return argv
-
-
-def _num(x) -> str:
-    if isinstance(x, float) and x.is_integer() and abs(x) < 1e15:
-        return str(int(x))
-    return repr(x) if isinstance(x, float) else str(x)
-
-
-def _inline(v) -> str:
-    from ..imu.config import ImuConfig
-    from ..imu.ideal import Extrinsic
-
-    if isinstance(v, ImuConfig):
-        v = v.to_dict()
-    elif isinstance(v, Extrinsic):
-        v = {"T_BS": v.matrix.tolist()}
-    return json.dumps(v) if isinstance(v, dict) else str(v)
-
-
-def _flags(opts, names) -> list[str]:
-    defaults = {f.name: (f.default_factory() if f.default_factory is not dataclasses.MISSING else f.default)
-                for f in dataclasses.fields(opts)}
-    out = []
-    for n in names:
-        v = getattr(opts, n)
-        if v == defaults[n] or v is None:
-            continue
-        flag = FLAGS[n]
-        if isinstance(v, bool):
-            out.append(flag)
-        elif n == "gravity":
-            out += [flag, *map(_num, v)]
-        elif n in ("model", "extrinsic"):
-            out += [flag, _inline(v)]
-        else:
-            out += [flag, _num(v)]
-    return out
+        return job_argv(self)
 
 
 __all__ = ["ImuOptions", "SplineOptions", "PosesInput", "SceneInput", "OutputOptions", "SynthesisJob",
-           "Origin", "FlagOrigin", "YamlOrigin", "FLAGS"]
+           "Origin", "FlagOrigin", "YamlOrigin", "FLAGS", "SPLINE_FIELDS"]

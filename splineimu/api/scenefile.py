@@ -9,7 +9,8 @@
       params: {}                  # the scene's own parameters
       # poses: mocap.tum          # ... or a pose file (TUM, or EuRoC csv with format: euroc)
       # format: tum
-      # spline: {kind: split, order: auto, knot_spacing_s: auto, smoothness: 1e-10, keep_outliers: false}
+      # spline: {kind: split, order: auto, knot_spacing_s: auto, smoothness: 1e-10, keep_outliers: false,
+      #          trim_ends_s: 0}
       # gaps: error               # error | bridge | split
       # max_gap_s: 0.5
       # repeated_stamps: error    # error | first
@@ -64,14 +65,23 @@ from pathlib import Path
 
 from ..batch.vary import draws_for_run, nominal_values, parse_vary, run_seed, set_dotted
 from ..errors import ConfigError, SplineImuError
-from .options import ImuOptions, OutputOptions, PosesInput, SceneInput, SplineOptions, SynthesisJob, YamlOrigin
+from .options import (
+    SPLINE_FIELDS,
+    ImuOptions,
+    OutputOptions,
+    PosesInput,
+    SceneInput,
+    SplineOptions,
+    SynthesisJob,
+    YamlOrigin,
+)
 
 #: Keys of each section (the file's structure).
 KEYS = {
     (): ("motion", "imu", "seed", "output", "cameras", "landmarks", "vary"),
     ("motion",): ("scene", "duration_s", "t0_ns", "params", "poses", "format", "spline", "gaps", "max_gap_s",
                   "repeated_stamps"),
-    ("motion", "spline"): ("kind", "order", "knot_spacing_s", "smoothness", "keep_outliers"),
+    ("motion", "spline"): SPLINE_FIELDS,
     ("imu",): ("rate_hz", "timestamps", "model", "extrinsic", "gravity", "sampling", "increments", "timing",
                "vibration", "rostopic"),
     ("output",): ("dir", "bag", "plot", "force", "tum", "bag_version"),
@@ -196,7 +206,7 @@ def job_from_document(doc, base) -> SynthesisJob:
         m = dict(motion)
         rel(m, "poses")
         spline = _build(SplineOptions, doc, _section(doc, ("motion", "spline")), ("motion", "spline"),
-                        ("kind", "order", "knot_spacing_s", "smoothness", "keep_outliers"))
+                        SPLINE_FIELDS)
         source = _build(PosesInput, doc, m, ("motion",), ("path", "format", "repeated_stamps", "max_gap_s", "gaps"),
                         spline=spline)
     if imu.get("timestamps") is not None and imu.get("rate_hz") is not None:  # the rate was ignored in silence

@@ -486,6 +486,11 @@ def _fit(job, track, log):
         at = getattr(exc, "pose_index", None)  # and the line of the pose they name
         line = None if at is None else int(track.line_numbers[at])
         raise InputError(exc.problem, path=job.motion.path, line=line) from None
+    trim = sp.trim_s(rep)
+    if trim > 0.0 and rep.knot_choice is not None:  # trimmed ends are not in the record: nothing to warn
+        zone = max(c["end_zone_s"] for c in (rep.knot_choice["rotation"], rep.knot_choice["position"]))
+        if trim >= 0.99 * zone:
+            rep.warnings = [w for w in rep.warnings if w.code != "ends_less_accurate"]
     for w in fit_warnings(rep):  # also in report.json and in the fit summary
         log.note(f"warning: {w['message']}")
     if rep.dropped_poses:
@@ -505,16 +510,29 @@ def _one(job, piece, out_dir, gaps, max_gap, write, result, log):
     track, spl, rep = piece
     result.source, result.fit_report = spl, rep
     seed = _seed(job)
-    t_ns = _stamps(job, int(track.t_ns[0]), int(track.t_ns[-1]), log, seed, write)
+    sp = job.motion.spline
+    trim = sp.trim_s(rep)
+    trim_ns = int(round(trim * 1e9))
+    if trim > 0.0 and job.imu.timestamps is None:  # the first sample on the untrimmed record's grid
+        trim_ns = int(round(np.ceil(trim * job.imu.rate_hz - 1e-9) * 1e9 / job.imu.rate_hz))
+    first, last = int(track.t_ns[0]) + trim_ns, int(track.t_ns[-1]) - int(round(trim * 1e9))
+    if last <= first:
+        raise sp._err("trim_ends_s", f"= {trim:.6g} s at each end leaves nothing of the "
+                                     f"{(track.t_ns[-1] - track.t_ns[0]) / 1e9:.6g} s of poses")
+    t_ns = _stamps(job, first, last, log, seed, write)
     t_s = (track.t_ns - int(track.t_ns[0])).astype(np.float64) / 1e9
     fit_data = _fit_residuals(spl, t_s, track) if (write and job.output.plot) else None
     report = poses_report(job, track, rep, gaps, max_gap)
+    report["spline"]["trimmed_ends_s"] = trim
     _vibration_warnings(job, t_ns, report, log)
     _synthesize(job, spl, t_ns, seed, out_dir, report, write, result, force=job.output.force if not quiet else False,
                 fit_data=fit_data)
     if not quiet:
         for text in fit_lines(rep, gaps, max_gap):
             log.line(text)
+        if trim > 0.0:
+            why = "auto: the fit's end zones" if sp.trim_ends_s == "auto" else "as asked"
+            log.line(f"trimmed       {trim:.3f} s at each end of the poses left out of the record ({why})")
         log.line(imu_line(getattr(t_ns, "stamp_ns", t_ns), job, seed, detailed=True))
         _camera_line(result, log)
     return result

@@ -101,6 +101,9 @@ def add_pose_args(p: argparse.ArgumentParser, fmt_help: str):
                    help="knot spacing in seconds, or auto (default: minimizes the predicted IMU error)")
     g.add_argument("--smoothness", type=float, metavar="MU",
                    help="relative weight of the smoothness penalty (default 1e-10; gaps get 1e-3)")
+    g.add_argument("--trim-ends", metavar="S",
+                   help="leave S seconds at each end of the poses out of the IMU record, or auto: the fit's "
+                        "end zones (k knot spacings), which see one-sided data (default 0)")
     g = p.add_argument_group("gaps")
     g.add_argument("--max-gap", type=float, metavar="S",
                    help="longest gap bridged silently (default 0.5 s, or 5x the median spacing if larger)")
@@ -151,7 +154,8 @@ def options_from_args(args, motion: str):
                             params=_params(args.param), origin=o)
     else:
         spline = SplineOptions(**_given(args, kind="spline", order="order", knot_spacing_s="knot_spacing",
-                                        smoothness="smoothness", keep_outliers="keep_outliers"), origin=o)
+                                        smoothness="smoothness", keep_outliers="keep_outliers",
+                                        trim_ends_s="trim_ends"), origin=o)
         source = PosesInput(args.poses, motion, **_given(args, repeated_stamps="repeated_stamps",
                                                          max_gap_s="max_gap", gaps="gaps"), spline=spline, origin=o)
         if args.out is None:
