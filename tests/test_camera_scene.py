@@ -259,3 +259,25 @@ def test_scene_file_errors_give_the_file_and_line(tmp_path, change, line, messag
     if "missing.csv" not in message:
         expected = next(i for i, t in enumerate(text.splitlines(), start=1) if t.strip().startswith(line))
         assert err.line == expected and Path(err.path).name == "scene.yaml", str(err)
+
+
+def test_trimmed_ends_trim_the_camera_frames_too(tmp_path):
+    """motion.spline.trim_ends_s: the frames (on IMU time) keep to the trimmed record as the IMU
+    samples do."""
+    d = scene_dict()
+    d["motion"] = {"poses": str(EXAMPLE.parent / "ellipse_mocap.tum"), "spline": {"trim_ends_s": 2.0}}
+    d["landmarks"]["random"]["count"] = 50
+    for cam in d["cameras"].values():
+        cam["rate_hz"] = 4.0
+    out, res = run_scene(tmp_path / "poses", d)
+    from splineimu.io.imu_csv import read_imu_csv
+    from splineimu.io.tum import read_tum
+
+    t_imu = read_imu_csv(out / "mav0" / "imu0" / "data.csv")[0]
+    t_poses = read_tum(EXAMPLE.parent / "ellipse_mocap.tum").t_ns
+    t0_ns, t1_ns = int(t_poses[0]), int(t_poses[-1])
+    assert t_imu[0] >= t0_ns + 2_000_000_000 and t_imu[-1] <= t1_ns - 2_000_000_000
+    for name, cam in d["cameras"].items():
+        shift_ns = int(round(cam.get("timeshift_cam_imu", 0.0) * 1e9))
+        frames = res.observations[name].frame_t_ns + shift_ns  # on the IMU's clock
+        assert frames.min() >= t0_ns + 2_000_000_000 and frames.max() <= t1_ns - 2_000_000_000, name

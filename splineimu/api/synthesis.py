@@ -306,6 +306,18 @@ def _stamps(job, first_ns: int, last_ns: int, log, seed=None, write=True):
     return stamps[keep]
 
 
+class _Within:
+    """A motion source seen over [first_ns, last_ns] of its range (trimmed ends)."""
+
+    def __init__(self, source, first_ns, last_ns):
+        self._source = source
+        self.t_min_s = (first_ns - int(source.origin_ns)) / 1e9
+        self.t_max_s = (last_ns - int(source.origin_ns)) / 1e9
+
+    def __getattr__(self, name):
+        return getattr(self._source, name)
+
+
 def _vibration_warnings(job, t_ns, report, log):
     """Vibration above the Nyquist frequency aliases (as on a sensor without an anti-aliasing
     filter): kept in the data, told in report.json's warnings and on stderr."""
@@ -320,7 +332,9 @@ def _vibration_warnings(job, t_ns, report, log):
         log.note(f"warning: {w['message']}")
 
 
-def _synthesize(job, source, t_ns, seed, out_dir, report, write, result, force=None, fit_data=None):
+def _synthesize(job, source, t_ns, seed, out_dir, report, write, result, force=None, fit_data=None, window=None):
+    """``window``: (first, last) ns of the record within the source's range (trimmed ends), which
+    the cameras keep to as well."""
     from ..pipeline import synthesize_stream
     from .output import write_output
 
@@ -332,7 +346,8 @@ def _synthesize(job, source, t_ns, seed, out_dir, report, write, result, force=N
     if job.cameras is not None:
         from .cameras import observe_job, write_job_cameras
 
-        result.landmarks, result.observations, cam_report = observe_job(job, source, seed)
+        seen = source if window is None else _Within(source, *window)
+        result.landmarks, result.observations, cam_report = observe_job(job, seen, seed)
         report = {**report, **cam_report}
 
         def extra(tmp, out_report):  # the camera files, inside the same atomic output folder
@@ -526,7 +541,7 @@ def _one(job, piece, out_dir, gaps, max_gap, write, result, log):
     report["spline"]["trimmed_ends_s"] = trim
     _vibration_warnings(job, t_ns, report, log)
     _synthesize(job, spl, t_ns, seed, out_dir, report, write, result, force=job.output.force if not quiet else False,
-                fit_data=fit_data)
+                fit_data=fit_data, window=(first, last) if trim > 0.0 else None)
     if not quiet:
         for text in fit_lines(rep, gaps, max_gap):
             log.line(text)
