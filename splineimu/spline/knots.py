@@ -109,6 +109,8 @@ taken as noise-limited.
 
 from __future__ import annotations
 
+from math import comb
+
 import numpy as np
 
 from .._kernels import cv as _kcv
@@ -227,6 +229,20 @@ def _walk_ladder(windows, k, ladder, noises, r, lo, hi, lag=1.0):
 _END_MOTION = 4.0
 #: Where the input is cut for :func:`_end_bias2`, in end zones from its end.
 _END_CUTS = np.array([1.0, 1.5, 2.0, 2.5])
+#: The most the last zone's motion change may scale the cuts' estimate up (:func:`_end_bias2`).
+_END_CHANGE_MAX = 4.0
+
+
+def _change(t, X, m, lag, lo, hi):
+    """Mean squared m-th difference of X at ``lag`` samples over the differences centred in [lo,
+    hi] (NaN: none): how much the motion's derivative r = m - 1 changes there."""
+    n = X.shape[0]
+    if n <= m * lag:
+        return np.nan
+    D = sum(comb(m, j) * (-1.0) ** (m - j) * X[j * lag: n - (m - j) * lag] for j in range(m + 1))
+    centre = t[(m * lag) // 2: (m * lag) // 2 + D.shape[0]]
+    sel = (centre >= lo) & (centre <= hi)
+    return float(np.mean(np.sum(D[sel] ** 2, axis=1))) if np.any(sel) else np.nan
 
 
 def _end_bias2(windows, noises, k, dt, r, zone):
@@ -239,7 +255,11 @@ def _end_bias2(windows, noises, k, dt, r, zone):
     poses scatters (BROAD 05, 11, 16: the signal's 1.6-2.6x the surrogate's, with measured
     ends within 1.3-2.6x of the interior against the real IMU). Exact or clean
     low-rate input: the noise part alone predicted 0.001-0.2 m/s^2 where the ends' accel is
-    0.2-2.4 m/s^2 off (ellipse at 2-20 Hz). Returns 0 where the input is shorter than 4 zones."""
+    0.2-2.4 m/s^2 off (ellipse at 2-20 Hz). The cuts lie up to 3.5 zones in, so the estimate is
+    scaled by how much the motion's derivative changes over the last zone against over the cuts'
+    (:func:`_change`, at most :data:`_END_CHANGE_MAX` x): drones that land a second before the
+    end and then rest (EuRoC V2_03, vicon2gt V1_02) had their ends warned about for the landing.
+    Returns 0 where the input is shorter than 4 zones."""
     worst = 0.0
     for wd, nz, tail in ((windows[0], noises[0], False), (windows[-1], noises[-1], True)):
         t, Y, w = wd.t, np.hstack([wd.X, nz]), wd.w
@@ -264,7 +284,15 @@ def _end_bias2(windows, noises, k, dt, r, zone):
                 sig, sur = sig + np.sum(d[:, :3] ** 2), sur + np.sum(d[:, 3:] ** 2)
                 n += d.shape[0]
         if n and sig > _END_MOTION * sur:
-            worst = max(worst, (sig - sur) / n)
+            # the cuts lie up to 3.5 zones in: scaled by how much the motion changes in the last
+            # zone against there (a landing 1 s before the end, then rest, is no error of the end)
+            h = float(np.median(np.diff(t)))
+            lag = max(int(round(dt / h)), 1)
+            cuts = t[-1] - _END_CUTS * zone
+            here = _change(t, Y[:, :3], r + 1, lag, t[-1] - zone, t[-1])
+            there = _change(t, Y[:, :3], r + 1, lag, cuts.min() - zone, cuts.max())
+            ratio = min(here / there, _END_CHANGE_MAX) if there > 0 else 1.0
+            worst = max(worst, (sig - sur) / n * (ratio if np.isfinite(ratio) else 1.0))
     return worst
 
 
