@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from splineimu.spline import crossval
+from splineimu.spline import crossval, knots
 from splineimu.spline import surrogate as sur
 
 RATE_HZ = 200.0
@@ -72,3 +72,19 @@ def test_motion_limited_on_lengths_with_a_large_prime_factor():
         t = np.arange(n) * 0.05  # the flips scene at 20 Hz: its motion reaches the Nyquist frequency
         flips = make_scene("flips", duration_s=t[-1]).kinematics(t).position_world
         assert sur.motion_limited(flips) and not sur.motion_limited(rng.normal(size=(n, 3)))
+
+
+def test_cut_off_near_zero_hz_is_not_smeared_onto_it():
+    """A long window at a high rate and a coarse fit: 60 s at 1 kHz with 1 s knots puts the
+    cut-off near bin 30, and the default smoothing (117 bins) read the transfer 0.2 at 0 Hz: no
+    octave above it, no slope, so the white-noise bias correction stayed off (ellipse gyro 1.36x
+    the best fixed setting). It is read again with the narrowest kernel: cut-off where it is, the
+    white noise read as white (flatter than f^-1)."""
+    rate = 1000.0
+    t = np.arange(0.0, 60.0, 1.0 / rate)
+    motion = 0.5 * np.c_[np.sin(2 * np.pi * 0.05 * t), np.cos(2 * np.pi * 0.08 * t), np.sin(0.3 * t)]
+    noise = 1e-3 * np.random.default_rng(3).normal(size=(t.size, 3))
+    (wd,) = crossval._windows(t, np.ascontiguousarray(motion + noise), np.ones(t.size))
+    _, first, slope, _ = sur.noise_spectrum(wd, 6, 1.0, np.random.default_rng(7))
+    fc = first / (t[-1] - t[0])  # the fit's cut-off, about 1 / (2 dt)
+    assert 0.2 <= fc <= 0.8 and knots.WHITE_SLOPE < slope <= 0.5, (fc, slope)  # measured 0.47 Hz, -0.51
