@@ -76,8 +76,8 @@ def noise_spectrum(wd, k, dt_cv, rng):
 
     width = max(8, (n // 2) // 256)
     P, gain, first = smoothed(width)
-    if first is not None and first <= width // 2 and width > 8:
-        # a cut-off within half the kernel of 0 Hz is smeared onto it (1 kHz, 60 s, 1 s knots:
+    if first is not None and first <= width // 4 and width > 8:
+        # a cut-off within a quarter kernel of 0 Hz is smeared onto it (1 kHz, 60 s, 1 s knots:
         # 117 bins against a cut-off near bin 30 read the transfer 0.2 at 0 Hz and no slope, so
         # the white-noise bias correction was off: gyro 1.36x the best fixed setting): again with
         # the narrowest kernel
