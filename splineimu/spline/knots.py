@@ -55,7 +55,9 @@ Method
    per rung; the flips scene got 1.25x the best fixed accel error), and that prediction is reported
    (``predicted_gyro_rms_rad_s``, ``predicted_accel_rms_m_s2``); the same profile over the
    first and last ``k`` spacings gives the noise's error at the ends, and truncation the
-   motion's (:func:`splineimu.spline.zones.end_bias2`). The accelerometer's prediction
+   motion's (:func:`splineimu.spline.zones.end_bias2`); gaps of the input's lengths opened
+   where there are poses give the error inside its gaps (``gaps``). A best rotation rung that
+   reads no bias at all is moved between rungs (:func:`_between_rungs`). The accelerometer's prediction
    adds gravity tilted by the rotation fit's own (value) error, from the same ladder at r = 0
    (slow motion: without it the circle scene predicted 0.18x the measured accel error).
 4. **Low-rate or re-estimated input** (the power of the second differences falls toward the
@@ -202,8 +204,9 @@ def _between_rungs(best, ladder, rows, windows, noises, r, lag):
     neighbours' predictions in log spacing, at most half a rung away, with its own prediction.
     The ellipse's rotation (white noise, 200 Hz): every seed's best rung, 1017 ms, read no bias
     for a true 4e-4 rad/s (the change from the rung below is within the noise realization's
-    scatter; other surrogate draws never moved it), gyro 1.05-1.15x the best fixed setting
-    (905 ms, between the rungs); at the vertex (968 ms) 0.99-1.03x. Not applied where the bias
+    scatter; other surrogate draws never moved it), gyro 1.00-1.15x the best fixed setting
+    (905 ms, between the rungs) over seeds 1-10; at the vertex (952-968 ms) 0.98-1.08x. Not
+    applied where the bias
     was read: the six-position and rate-table scenes' errors are rough in the spacing (the
     knots' phase against their turns, +-15%), where a vertex moved them by chance (1.02 ->
     1.14-1.20x)."""
