@@ -75,8 +75,8 @@ class _Problem:
         self.step_tol = GN_STEP_TOL if noise_rad is None else max(GN_STEP_TOL, GN_STEP_REL * noise_rad)
         self.order, self.t0, self.dt, self.nseg = order, t0, dt, nseg
         self.n = nseg + order - 1
-        self.s = np.ascontiguousarray((t - t0) / dt)
         self.seg, self.u = segments(t, t0, dt)  # the kernels' parameter, without the rounding of s
+        self.s = self.seg + self.u
         self.M, self.Mc = (m.copy() for m in _blending(order))
         self.smoothness = smoothness
         self.w_rot = w_rot
@@ -84,7 +84,7 @@ class _Problem:
         # penalty scale: data weight per control point
         self.data_per_ctrl = max(float(np.sum(w)) / self.n, 1e-12)
         # a control point whose support contains a segment without any pose borders a gap
-        seg = np.clip(np.floor(self.s).astype(np.int64), 0, nseg - 1)
+        seg = np.clip(self.seg, 0, nseg - 1)
         empty = (np.bincount(seg[w > 0], minlength=nseg) == 0).astype(np.float64)
         self.sparse = np.convolve(empty, np.ones(order))[: self.n] > 0
         self.n_sparse = int(self.sparse.sum())

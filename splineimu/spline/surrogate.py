@@ -71,8 +71,9 @@ def noise_spectrum(wd, k, dt_cv, rng):
         kernel = np.ones(width) / width
         P, Pw, W = (np.column_stack([np.convolve(x[:, j], kernel, mode="same") for j in range(x.shape[1])])
                     for x in raw)
-        ok = np.flatnonzero(np.mean(Pw / np.maximum(W, 1e-300), axis=1) >= 0.2)
-        return P, np.mean(Pw / np.maximum(W, 1e-300), axis=1), (int(ok[0]) if ok.size else None)
+        gain = np.mean(Pw / np.maximum(W, 1e-300), axis=1)
+        ok = np.flatnonzero(gain >= 0.2)
+        return P, gain, (int(ok[0]) if ok.size else None)
 
     width = max(8, (n // 2) // 256)
     P, gain, first = smoothed(width)

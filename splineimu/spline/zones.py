@@ -51,14 +51,14 @@ def _gap_bias2(windows, noises, k, dt, r, zone, lengths):
     0.024 elsewhere."""
     out = np.full(len(lengths), np.nan)
     per = max(_GAP_PLACES // len(windows), 1)
+    spacing = [float(np.median(np.diff(wd.t))) for wd in windows]
     for j, G in enumerate(lengths):
         acc = n = 0.0
-        for wd, nz in zip(windows, noises):
+        for wd, nz, h in zip(windows, noises, spacing):
             t, w = wd.t, wd.w
             reach = G / 2.0 + 3.0 * zone
             if t[-1] - t[0] <= 2.0 * reach:
                 continue
-            h = float(np.median(np.diff(t)))
             for c in np.linspace(t[0] + reach, t[-1] - reach, per + 2)[1:-1]:
                 sel = np.flatnonzero((t >= c - reach) & (t <= c + reach))
                 near = sel[np.abs(t[sel] - c) <= G / 2.0 + zone]
@@ -95,23 +95,27 @@ def gap_predictions(windows, noises, k, dt, r, zone, gaps, pred):
     return [(a, b, float(np.sqrt(pred**2 + e))) for (a, b), e in zip(gaps, at)]
 
 
-def _change(t, X, m, lag, lo, hi):
-    """Mean squared m-th difference of X at ``lag`` samples over the differences centred in [lo,
-    hi] (NaN: none): how much the motion's derivative r = m - 1 changes there."""
+def _change(t, X, m, lag, ranges):
+    """Mean squared m-th difference of X at ``lag`` samples over the differences centred in each
+    [lo, hi] of ``ranges`` (NaN: none): how much the motion's derivative r = m - 1 changes there."""
     n = X.shape[0]
     if n <= m * lag:
-        return np.nan
+        return [np.nan] * len(ranges)
     D = sum(comb(m, j) * (-1.0) ** (m - j) * X[j * lag: n - (m - j) * lag] for j in range(m + 1))
+    D2 = np.sum(D**2, axis=1)
     centre = t[(m * lag) // 2: (m * lag) // 2 + D.shape[0]]
-    sel = (centre >= lo) & (centre <= hi)
-    return float(np.mean(np.sum(D[sel] ** 2, axis=1))) if np.any(sel) else np.nan
+    out = []
+    for lo, hi in ranges:
+        sel = (centre >= lo) & (centre <= hi)
+        out.append(float(np.mean(D2[sel])) if np.any(sel) else np.nan)
+    return out
 
 
 def end_bias2(windows, noises, k, dt, r, zone):
     """The squared r-th derivative error the ends add to the interior's through the motion a
-    one-sided fit misses, measured by truncation: the fit of the last (first) 4 ``zone`` of the
-    input and that of the same poses without the last (first) ``zone`` differ, over the ``zone``
-    before the cut, by the cut fit's end error (the other is interior there). The surrogate's
+    one-sided fit misses, measured by truncation: the fit of the last (first) 6 ``zone`` of the
+    input and those of the same poses cut 1-2.5 zones before the end differ, over the ``zone``
+    before each cut, by the cut fit's end error (the other is interior there). The surrogate's
     difference is the noise's share of it (counted already) and taken off; it is counted only
     where the motion's share dominates (:data:`_END_MOTION`): one zone's difference of noisy
     poses scatters (BROAD 05, 11, 16: the signal's 1.6-2.6x the surrogate's, with measured
@@ -123,11 +127,15 @@ def end_bias2(windows, noises, k, dt, r, zone):
     end and then rest (EuRoC V2_03, vicon2gt V1_02) had their ends warned about for the landing.
     Returns 0 where the input is shorter than 4 zones."""
     worst = 0.0
+    span = (_END_CUTS[-1] + 3.5) * zone
     for wd, nz, tail in ((windows[0], noises[0], False), (windows[-1], noises[-1], True)):
-        t, Y, w = wd.t, np.hstack([wd.X, nz]), wd.w
-        if not tail:  # the head, as the tail of the reversed input (squared errors keep no sign)
-            t, Y, w = t[-1] - t[::-1], Y[::-1], w[::-1]
-        a = max(t[-1] - (_END_CUTS[-1] + 3.5) * zone, t[0])
+        # the end's stretch alone; the head as the tail of the reversed input (squared errors
+        # keep no sign)
+        sel = wd.t >= wd.t[-1] - span if tail else wd.t <= wd.t[0] + span
+        t, Y, w = wd.t[sel], np.hstack([wd.X[sel], nz[sel]]), wd.w[sel]
+        if not tail:
+            t, Y, w = wd.t[-1] - t[::-1], Y[::-1], w[::-1]
+        a = max(t[-1] - span, t[0])
         full = t >= a
         da = _Window(t[full], np.ascontiguousarray(Y[full]), w[full])
         ref = None
@@ -148,11 +156,9 @@ def end_bias2(windows, noises, k, dt, r, zone):
         if n and sig > _END_MOTION * sur:
             # the cuts lie up to 3.5 zones in: scaled by how much the motion changes in the last
             # zone against there (a landing 1 s before the end, then rest, is no error of the end)
-            h = float(np.median(np.diff(t)))
-            lag = max(int(round(dt / h)), 1)
+            lag = max(int(round(dt / float(np.median(np.diff(wd.t))))), 1)
             cuts = t[-1] - _END_CUTS * zone
-            here = _change(t, Y[:, :3], r + 1, lag, t[-1] - zone, t[-1])
-            there = _change(t, Y[:, :3], r + 1, lag, cuts.min() - zone, cuts.max())
+            here, there = _change(t, Y[:, :3], r + 1, lag, ((t[-1] - zone, t[-1]), (cuts.min() - zone, cuts.max())))
             ratio = min(here / there, _END_CHANGE_MAX) if there > 0 else 1.0
             worst = max(worst, (sig - sur) / n * (ratio if np.isfinite(ratio) else 1.0))
     return worst
