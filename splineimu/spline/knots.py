@@ -56,8 +56,12 @@ Method
    (``predicted_gyro_rms_rad_s``, ``predicted_accel_rms_m_s2``); the same profile over the
    first and last ``k`` spacings gives the noise's error at the ends, and truncation the
    motion's (:func:`splineimu.spline.zones.end_bias2`); gaps of the input's lengths opened
-   where there are poses give the error inside its gaps (``gaps``). A best rotation rung that
-   reads no bias at all is moved between rungs (:func:`_between_rungs`). The accelerometer's prediction
+   where there are poses give the error inside its gaps (``gaps``). Where the noise is white,
+   a rotation rung whose bias estimate is below its noise part (within the scatter of the noise realization, and lagging:
+   the 1 kHz ellipse read 1.6e-4 rad/s for a true 2.7e-4) takes at least the bias of the
+   nearest rung above that reads one clearly, scaled down as dt^(k - 1) or as steeply as it
+   grows to the next clear rung (:func:`_extrapolate_bias`); a best rotation rung that reads no bias at all is moved
+   between rungs (:func:`_between_rungs`). The accelerometer's prediction
    adds gravity tilted by the rotation fit's own (value) error, from the same ladder at r = 0
    (slow motion: without it the circle scene predicted 0.18x the measured accel error).
 4. **Low-rate or re-estimated input** (the power of the second differences falls toward the
@@ -205,9 +209,9 @@ def _between_rungs(best, ladder, rows, windows, noises, r, lag):
     The ellipse's rotation (white noise, 200 Hz): every seed's best rung, 1017 ms, read no bias
     for a true 4e-4 rad/s (the change from the rung below is within the noise realization's
     scatter; other surrogate draws never moved it), gyro 1.00-1.15x the best fixed setting
-    (905 ms, between the rungs) over seeds 1-10; at the vertex (952-968 ms) 0.98-1.08x. Not
-    applied where the bias
-    was read: the six-position and rate-table scenes' errors are rough in the spacing (the
+    (905 ms, between the rungs) over seeds 1-10; at the vertex (937-968 ms, of the predictions
+    with the floor of :func:`_extrapolate_bias`; the rung's own reading decides) 0.94-1.08x.
+    Not applied where the bias was read: the six-position and rate-table scenes' errors are rough in the spacing (the
     knots' phase against their turns, +-15%), where a vertex moved them by chance (1.02 ->
     1.14-1.20x)."""
     _, k, dt, _, _, dt_cv = best
@@ -224,6 +228,41 @@ def _between_rungs(best, ladder, rows, windows, noises, r, lag):
     dn = dt * _LADDER**x
     var, bias2, ends = _ladder_errors(windows, k, np.array([dn / _LADDER, dn]), noises, r, lag)
     return float(np.sqrt(var[0] + bias2[0])), k, float(dn), float(var[0]), ends[0], dt_cv
+
+
+def _extrapolate_bias(dts, var, bias2, p):
+    """Bias^2 estimates of the rungs ``dts`` (increasing) floored by the nearest rung above
+    whose estimate exceeds its noise part, scaled down as dt^p (the asymptotic order of a
+    spline's bias: p = k - r for order k and derivative r) or as the bias grows from it to the
+    next such rung where that is steeper.
+
+    Below the noise part the estimate (the change from the rung below) is within the noise
+    realization's scatter, and it lags a bias that grows with the spacing. The ellipse at
+    1 kHz (white noise): its order-6 rungs read 1.3e-4 and 1.6e-4 rad/s at 794 and 992 ms for
+    a true 1e-4 and 2.7e-4; the clear readings at 1240 and 1550 ms (1.0e-3 and 3.8e-3, as
+    dt^5.9) scaled down give 0.7e-4 and 2.7e-4, and the choice went from 992 to 794 ms (gyro
+    1.24-1.30x the best fixed setting on 3 of 6 seeds, now 0.91-0.94x on all). Closer to the
+    cut-off the bias grows faster than dt^p, and a clear reading can itself be high (the flips
+    scene's rotation proxy at 10 kHz read 2x the bias at 70 ms): scaled by dt^5 alone the floor
+    sent the flips scene at 10 kHz to finer knots, 1.16-1.21x; with the steeper power 0.98x.
+    Elsewhere within the bars either way (flips at 1 kHz 0.92-0.94x before, 1.07-1.14x now;
+    rate-table at 1 kHz 1.12x before, 0.98x now). Applied where the noise is white only: under
+    coloured noise the readings hold the surrogate's misfit too, and the floor moved hand-held
+    motions with AR(1) or upsampled noise to finer knots (gyro 0.88 -> 1.09x, 0.97 -> 1.07x)."""
+    out = bias2.copy()
+    clear = np.flatnonzero(bias2 > var)
+    for j in range(dts.size):
+        above = clear[clear > j]
+        if bias2[j] <= var[j] and above.size:
+            i = above[0]
+            q = p
+            if above.size > 1:  # steeper between the clear rungs: that power
+                with np.errstate(divide="ignore", over="ignore", under="ignore"):
+                    g = 0.5 * np.log(bias2[above[1]] / bias2[i]) / np.log(dts[above[1]] / dts[i])
+                q = max(p, g) if np.isfinite(g) else p
+            with np.errstate(under="ignore"):
+                out[j] = max(bias2[j], bias2[i] * (dts[j] / dts[i]) ** (2 * q))
+    return out
 
 
 def _walk_ladder(windows, k, ladder, noises, r, lo, hi, lag=1.0):
@@ -329,6 +368,7 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
     # the position's walk stops at WALK_MAX_S (its bias estimate lags); the rotation's goes on
     walk_cap = WALK_MAX_S if r == 2 else np.inf
     ladders = {}
+    unread = set()  # (order, spacing) of the rungs that read no bias (for _between_rungs)
     for k in orders:
         dt_cv = min((v, dt) for (kk, dt), v in table.items() if kk == k)[1]
         steps = np.arange(-1, 1) if dt_fixed is not None else (np.arange(-4, 1) if limited else np.arange(-2, 3))
@@ -347,6 +387,9 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
         else:
             var, bias2, ends = _ladder_errors(windows, k, ladder, noises, r, bias_lag)
         ladders[k] = ladder
+        unread.update((k, float(dt)) for dt, v, b in zip(ladder[1:], var, bias2) if b <= v * _BIAS_UNREAD)
+        if bias_lag > 1.0:  # white noise's gyro (coloured noise's estimate holds the surrogate's misfit)
+            bias2 = _extrapolate_bias(ladder[1:], var, bias2, k - r)
         consider(k, ladder[1:], var, bias2, ends, dt_cv)
     if best is None:
         raise SplineImuError("no knot spacing could be evaluated (too few poses for the orders?)")
@@ -358,7 +401,7 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
         var, bias2, ends = _ladder_errors(windows, k, half, noises, r, bias_lag)
         inside = (half[1:] >= ladders[k][1] * 0.999) & (half[1:] <= ladders[k][-1] * 1.001)
         consider(k, half[1:][inside], var[inside], bias2[inside], [e for e, i in zip(ends, inside) if i], dt_cv)
-    if dt_fixed is None and r == 1 and best[0] ** 2 <= best[3] * (1.0 + _BIAS_UNREAD):
+    if dt_fixed is None and r == 1 and (best[1], best[2]) in unread:
         best = _between_rungs(best, ladders[best[1]], rows, windows, noises, r, bias_lag)
     pred, k, dt, var, ends, dt_cv = best
     # the first and last k knot spacings see one-sided data: their noise part on its own, and
