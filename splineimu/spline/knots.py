@@ -212,9 +212,9 @@ def _between_rungs(best, ladder, rows, windows, noises, r, lag):
     scatter; other surrogate draws never moved it), gyro 1.00-1.15x the best fixed setting
     (905 ms, between the rungs) over seeds 1-10; at the vertex (937-968 ms, of the predictions
     with the floor of :func:`_extrapolate_bias`; the rung's own reading decides) 0.94-1.08x.
-    Not applied where the bias was read: the six-position and rate-table scenes' errors are rough in the spacing (the
-    knots' phase against their turns, +-15%), where a vertex moved them by chance (1.02 ->
-    1.14-1.20x)."""
+    Not applied where the bias was read: the six-position and rate-table scenes' errors are
+    rough in the spacing (the knots' phase against their turns, +-15%), where a vertex moved
+    them by chance (1.02 -> 1.14-1.20x)."""
     _, k, dt, _, _, dt_cv = best
     j = int(np.argmin(np.abs(np.log(ladder / dt))))
     if not 2 <= j <= ladder.size - 2:  # the rung below the first is a reference only
