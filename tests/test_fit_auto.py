@@ -719,6 +719,10 @@ def test_unclear_gyro_bias_estimates_take_the_power_law_of_a_clear_one():
         assert np.array_equal(out[clear], bias2[clear]) and np.all(out >= bias2)
         floor = bias2[3] * (dts[:3] / dts[3]) ** (2 * q)
         np.testing.assert_allclose(out[:3], np.maximum(bias2[:3], floor), rtol=1e-9)
+    # a rung that read inf (a singular fit) floors nothing
+    bias2 = np.array([1e-8, np.inf, 1e-7, 5e-6, 4e-5, 1e-5])
+    out = knots._extrapolate_bias(dts, var, bias2, 5)
+    assert np.isfinite(out[0]) and out[0] == max(1e-8, 5e-6 * (dts[0] / dts[3]) ** 10)
 
 
 def test_a_best_rung_without_bias_is_refined_between_rungs():

@@ -254,7 +254,7 @@ def _extrapolate_bias(dts, var, bias2, p):
     unchanged (white 1.14x, coloured 1.18x); single cases moved either way (hand-held AR(1)
     0.88 -> 1.09x, slow white 1.03 -> 1.10x; rate-table AR(1) 1.11 -> 0.98x)."""
     out = bias2.copy()
-    clear = np.flatnonzero(bias2 > var)
+    clear = np.flatnonzero((bias2 > var) & np.isfinite(bias2))  # (singular rungs read inf)
     for j in range(dts.size):
         above = clear[clear > j]
         if bias2[j] <= var[j] and above.size:
