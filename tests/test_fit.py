@@ -297,6 +297,15 @@ def test_se3_predicted_error_is_at_the_grid_it_fits():
     assert rep.knot_spacing_s < 0.5 * rep.knot_choice["rotation"]["knot_spacing_s"]  # the case in point
     assert 0.8 < rep.predicted_gyro_rms_rad_s / gyro < 2.0, (rep.predicted_gyro_rms_rad_s, gyro)  # measured 1.19
     assert 0.5 < rep.predicted_accel_rms_m_s2 / accel < 2.0, (rep.predicted_accel_rms_m_s2, accel)  # measured 0.73
+    # the choice's entries describe the grid fitted too: its end zones (k spacings of it, where
+    # they were the rotation's own 6 x 0.85 s), and the noise it adds at the ends
+    rot = rep.knot_choice["rotation"]
+    assert rot["predicted_rms"] == rep.predicted_gyro_rms_rad_s
+    zone = rot["end_zone_s"]
+    assert zone == pytest.approx(rep.order * rep.knot_spacing_s), (zone, rep.order, rep.knot_spacing_s)
+    te = np.r_[np.arange(0.0, zone, 0.001), np.arange(10.0 - zone, 10.0, 0.001)]
+    ends = float(np.sqrt(np.mean(np.sum((spl.imu(te)[0] - ELLIPSE.imu(te)[0]) ** 2, axis=1))))
+    assert 1 / 3 < rot["end_predicted_rms"] / ends < 3, (rot["end_predicted_rms"], ends)
 
 
 def test_poses_logged_twice_are_refused_by_the_automatic_choice():
