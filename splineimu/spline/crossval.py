@@ -99,9 +99,11 @@ class _Window:
                          self._scratch("Hf", (n, k)), C, *sizes)
         return C, s, seg, B, nseg, dt_, sizes
 
-    def score(self, k, dt, fold):
-        C, _, seg, B, _, _, sizes = self.fit_folds(k, dt, fold, N_FOLDS)
-        total = _kcv.held_out_error(fold, self.X, C, seg, B, self.scored_index, self._scratch("e", (self.t.size,)),
+    def score(self, k, dt, fold, X=None):
+        """Summed squared held-out error of X (default: the signal) and the count scored."""
+        X = self.X if X is None else X
+        C, _, seg, B, _, _, sizes = self.fit_folds(k, dt, fold, N_FOLDS, X)
+        total = _kcv.held_out_error(fold, X, C, seg, B, self.scored_index, self._scratch("e", (self.t.size,)),
                                     *sizes)
         return (total if np.isfinite(total) else np.inf), self.n_scored
 
