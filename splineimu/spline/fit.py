@@ -173,22 +173,23 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
             # one grid: the finer spacing, the position's order (the accelerometer's)
             rdt = pdt = min(rdt, pdt)
             ro = po = max(ro, po)
-            if ch is not None:  # the predictions moved to that spacing: the interior's, and the
-                # noise it adds to the ends' and gaps' (and the end zones of the grid fitted)
-                for key, r in (("rotation", 1), ("position", 2)):
-                    c = ch[key]
-                    new = prediction_at_spacing(c, rdt, r)
-                    add = max(new**2 - c["predicted_rms"] ** 2, 0.0)
-                    c["end_predicted_rms"] = float(np.sqrt(c["end_predicted_rms"] ** 2 + add))
-                    for gap in c["gaps"]:
-                        gap["predicted_rms"] = float(np.sqrt(gap["predicted_rms"] ** 2 + add))
-                    c["predicted_rms"], c["end_zone_s"] = new, float(ro * layout(t[0], t[-1], rdt, ro)[1])
-                ch["predicted_gyro_rms_rad_s"] = ch["rotation"]["predicted_rms"]
-                ch["predicted_accel_rms_m_s2"] = float(np.hypot(ch["position"]["predicted_rms"],
-                                                                ch["accel_from_orientation_rms_m_s2"]))
+        lay_r, lay_p = layout(t[0], t[-1], rdt, ro), layout(t[0], t[-1], pdt, po)
+        if kind == "se3" and ch is not None:  # the predictions moved to that spacing: the
+            # interior's, and the noise it adds to the ends' and gaps' (and the end zones of the grid)
+            for key, r in (("rotation", 1), ("position", 2)):
+                c = ch[key]
+                new = prediction_at_spacing(c, rdt, r)
+                add = max(new**2 - c["predicted_rms"] ** 2, 0.0)
+                c["end_predicted_rms"] = float(np.sqrt(c["end_predicted_rms"] ** 2 + add))
+                for gap in c["gaps"]:
+                    gap["predicted_rms"] = float(np.sqrt(gap["predicted_rms"] ** 2 + add))
+                c["predicted_rms"], c["end_zone_s"] = new, float(ro * lay_r[1])
+            ch["predicted_gyro_rms_rad_s"] = ch["rotation"]["predicted_rms"]
+            ch["predicted_accel_rms_m_s2"] = float(np.hypot(ch["position"]["predicted_rms"],
+                                                            ch["accel_from_orientation_rms_m_s2"]))
         sig = (1e-3, 1e-3) if ch is None else tuple(max(ch[key]["cv_rms"] / np.sqrt(3.0), 1e-6)
                                                     for key in ("rotation", "position"))
-        return ch, ro, layout(t[0], t[-1], rdt, ro), po, layout(t[0], t[-1], pdt, po), sig
+        return ch, ro, lay_r, po, lay_p, sig
 
     choice, r_order, lay_r, p_order, lay_p, (sig_r, sig_p) = settings(w)
 

@@ -462,17 +462,17 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
         if 1.0 / 3.0 < growth < NOISE_GROWTH:
             rng = np.random.default_rng(11)
             unit = [rng.normal(size=wd.X.shape) for wd in windows]
-            white = [np.sqrt(held[0] / 3.0) * u for u in unit]
-            vw, _, _ = _ladder_errors(windows, k, np.array([dt / _LADDER, dt]), white, r)
-            out["predicted_rms_if_noise"] = float(np.sqrt(vw[0]))
+            # the derivative's error of unit white noise at the choice (the fits are linear: a
+            # noise of standard deviation s gives s^2 times it)
+            vu = _ladder_errors(windows, k, np.array([dt / _LADDER, dt]), unit, r)[0][0]
+            out["predicted_rms_if_noise"] = float(np.sqrt(vu * held[0] / 3.0))
             # the noise under the motion: the held-out errors at three gap lengths as noise plus
             # motion growing as a power of the gap, the noise part through the leave-out gain of
             # white noise, and its derivative's error at the choice added to the prediction
             gain = sum(wd.score(k, dt_cv, wd.folds(block), u)[0] for wd, u in zip(windows, unit)) / den
             sigma = np.sqrt(noise_under_motion(held, block) / gain) if gain > 0 else 0.0
-            vn, _, _ = _ladder_errors(windows, k, np.array([dt / _LADDER, dt]), [sigma * u for u in unit], r)
             for key in ("predicted_rms", "end_predicted_rms", "predicted_noise_rms"):
-                out[key] = float(np.sqrt(out[key] ** 2 + vn[0]))
+                out[key] = float(np.sqrt(out[key] ** 2 + vu * sigma**2))
             out["noise_under_motion"] = float(sigma)
     return out
 
