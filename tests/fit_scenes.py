@@ -94,3 +94,17 @@ def gyro_error(sc, duration_s, margin=1.0):
     te = np.arange(margin, duration_s - margin, 0.005)
     g0 = sc.imu(te)[0]
     return lambda spl: float(np.sqrt(np.mean(np.sum((spl.imu(te)[0] - g0) ** 2, axis=1))))
+
+
+#: Hand-held positions (three sines per axis: amplitude [m], rate [rad/s], phase), 0.4-1.3 Hz.
+HAND_SINES = (
+    ((0.1181, 2.4644, 1.3290), (0.2846, 6.8342, 1.5501), (0.2170, 4.0027, 0.8443)),
+    ((0.2470, 3.0625, 2.5929), (0.2084, 3.4788, 2.9361), (0.2321, 8.2203, 2.9064)),
+    ((0.1207, 4.0617, 4.4562), (0.0938, 2.6852, 0.8968), (0.1801, 6.1128, 2.2058)),
+)
+
+
+def hand_positions(t, r=0):
+    """The r-th derivative (0 or 2) of the :data:`HAND_SINES` positions, (N, 3)."""
+    sign = 1.0 if r == 0 else -1.0
+    return np.column_stack([sum(sign * a * w**r * np.sin(w * t + ph) for a, w, ph in axis) for axis in HAND_SINES])
