@@ -160,6 +160,14 @@ WALK_MAX_S = 0.05
 #: hand-held rotation near the Nyquist frequency, whose prediction is 0.25x the measured (told
 #: too). EuRoC's and OpenVINS' 200 Hz and 20 Hz ground truth: the same warnings with 5 or 12.
 NOISE_GROWTH = 12.0
+#: The least block of the first cross-validation pass [poses] where the top of the band holds
+#: noise: noise correlated over two poses (drawn at half the rate and interpolated) is partly
+#: predicted from a neighbour left in by 2-pose blocks (0.1 s at 20 Hz), which then chose to
+#: interpolate it (slow motion at 20 Hz: gyro 13-21x, accel 59-80x the best fixed setting).
+#: Not beyond 0.2 s (the exact ellipse at 2 and 5 Hz, non-motion-limited: blocks of 2 s and
+#: 0.4 s moved the choice, its ends' accel error 7.0 m/s^2 for 0.6 predicted), nor for
+#: motion-limited input.
+MIN_FIRST_BLOCK = 4
 #: Standard gravity [m/s^2], for the accelerometer error an orientation error causes.
 GRAVITY_M_S2 = 9.81
 #: The coarsest knot spacing tried (and a quarter of the span): slow or still motion (a rate
@@ -343,7 +351,9 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
     else:
         grid = np.array([float(dt_fixed)])
     # 1. cross-validation with 0.1 s blocks, then with blocks of 3 noise correlation times
-    block = max(1, int(round(0.1 / h)))
+    limited = dt_fixed is None and all(motion_limited(wd.X) for wd in windows)
+    least = 1 if limited or dt_fixed is not None else min(MIN_FIRST_BLOCK, int(round(0.2 / h)))
+    block = max(least, 1, int(round(0.1 / h)))
     k_first = 4 if 4 in orders else orders[0]
     table = _search(windows, (k_first,), grid, block, lo, hi)
     k0, dt0, _ = _best(table, (k_first,))
@@ -359,7 +369,6 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
     # 2. per order, the derivative's error on a ladder around the value-optimal spacing, with a
     # surrogate of the pose noise (spectrum from the residual) propagated through the same fits
     k_cv, dt_cvb = _best(table, orders)[:2]
-    limited = dt_fixed is None and all(motion_limited(wd.X) for wd in windows)
     # the derivative's noise error is the noise spectrum times f^(2r): where that spectrum rises
     # toward low frequency the error sits below the cut-off, so the spectrum is read from the
     # coarser value-optimal fit and followed below (not for motion-limited input, whose
