@@ -74,7 +74,7 @@ Method
    error at the choice were that error white noise is reported too (``predicted_rms_if_noise``,
    warning ``prediction_assumes_motion``): an upper bound where noise and motion mix (2-5x the
    measured error on fast hand-held motion at 20 Hz). There the noise under the motion is read
-   too (:func:`noise_under_motion`: the held-out errors at three gap lengths as noise plus motion
+   too (:func:`.surrogate.noise_under_motion`: the held-out errors at three gap lengths as noise plus motion
    growing as a power of the gap; ``noise_under_motion`` in the report) and its derivative's
    error at the choice added to the prediction, which the tenth of the surrogate missed: flips
    at 20 Hz with 0.1 deg / 1 mm noise predicted gyro 0.009 rad/s for 0.098 measured, now 0.087;
@@ -132,7 +132,7 @@ from ..errors import SplineImuError
 from .crossval import _STEP, _correlation_lag, _search, _windows
 from .report import WARN_ACCEL_M_S2, WARN_GYRO_RAD_S, FitWarning
 from .signals import MAX_CONTROL_TURN_RAD, anchor_block, max_rotation_spacing, rotation_increments
-from .surrogate import motion_limited, noise_surrogates
+from .surrogate import motion_limited, noise_surrogates, noise_under_motion
 from .zones import end_bias2, find_gaps, gap_predictions
 
 ORDERS = (4, 5, 6)
@@ -484,40 +484,6 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
                 out[key] = float(np.sqrt(out[key] ** 2 + vu * sigma**2))
             out["noise_under_motion"] = float(sigma)
     return out
-
-
-def noise_under_motion(held, block):
-    """The noise part N of held-out mean squared errors ``held`` at blocks of 1, 2, 3 x ``block``
-    poses (gaps g = m block + 1 pose spacings), read as ``N + M g^(2p)``: p from the ratio of the
-    two differences, then M and N. Where the differences do not fit that (not both positive, or
-    growing more slowly than any power), all of the first is taken for noise.
-
-    Examples
-    --------
-    >>> g = np.array([2.0, 3.0, 4.0])
-    >>> round(noise_under_motion(1e-6 + 1e-8 * g**6, 1), 12)  # p = 3
-    1e-06
-    """
-    held = np.asarray(held, dtype=np.float64)
-    g = np.array([block + 1.0, 2 * block + 1.0, 3 * block + 1.0])
-    d1, d2 = held[1] - held[0], held[2] - held[1]
-    if not (d1 > 0 and d2 > 0):
-        return float(held[0])
-
-    def ratio(p):
-        return (g[2] ** (2 * p) - g[1] ** (2 * p)) / (g[1] ** (2 * p) - g[0] ** (2 * p))
-
-    lo, hi = 0.05, 12.0
-    if d2 / d1 <= ratio(lo):
-        return float(held[0])
-    if d2 / d1 >= ratio(hi):
-        p = hi
-    else:
-        for _ in range(60):  # bisection: the ratio grows with p
-            p = 0.5 * (lo + hi)
-            lo, hi = (p, hi) if ratio(p) < d2 / d1 else (lo, p)
-    M = d1 / (g[1] ** (2 * p) - g[0] ** (2 * p))
-    return float(min(max(held[0] - M * g[0] ** (2 * p), 0.0), held[0]))
 
 
 def choose_knot_spacing(t, P, R, w=None, rotation_order="auto", position_order="auto",

@@ -170,3 +170,37 @@ def prediction_at_spacing(c, dt, r):
         return c["predicted_rms"]
     noise = noise_at_spacing(c["predicted_noise_rms"], c["knot_spacing_s"], dt, r)
     return float(np.sqrt(noise**2 + max(c["predicted_rms"] ** 2 - c["predicted_noise_rms"] ** 2, 0.0)))
+
+
+def noise_under_motion(held, block):
+    """The noise part N of held-out mean squared errors ``held`` at blocks of 1, 2, 3 x ``block``
+    poses (gaps g = m block + 1 pose spacings), read as ``N + M g^(2p)``: p from the ratio of the
+    two differences, then M and N. Where the differences do not fit that (not both positive, or
+    growing more slowly than any power), all of the first is taken for noise.
+
+    Examples
+    --------
+    >>> g = np.array([2.0, 3.0, 4.0])
+    >>> round(noise_under_motion(1e-6 + 1e-8 * g**6, 1), 12)  # p = 3
+    1e-06
+    """
+    held = np.asarray(held, dtype=np.float64)
+    g = np.array([block + 1.0, 2 * block + 1.0, 3 * block + 1.0])
+    d1, d2 = held[1] - held[0], held[2] - held[1]
+    if not (d1 > 0 and d2 > 0):
+        return float(held[0])
+
+    def ratio(p):
+        return (g[2] ** (2 * p) - g[1] ** (2 * p)) / (g[1] ** (2 * p) - g[0] ** (2 * p))
+
+    lo, hi = 0.05, 12.0
+    if d2 / d1 <= ratio(lo):
+        return float(held[0])
+    if d2 / d1 >= ratio(hi):
+        p = hi
+    else:
+        for _ in range(60):  # bisection: the ratio grows with p
+            p = 0.5 * (lo + hi)
+            lo, hi = (p, hi) if ratio(p) < d2 / d1 else (lo, p)
+    M = d1 / (g[1] ** (2 * p) - g[0] ** (2 * p))
+    return float(min(max(held[0] - M * g[0] ** (2 * p), 0.0), held[0]))
