@@ -102,9 +102,15 @@ HAND_SINES = (
     ((0.2470, 3.0625, 2.5929), (0.2084, 3.4788, 2.9361), (0.2321, 8.2203, 2.9064)),
     ((0.1207, 4.0617, 4.4562), (0.0938, 2.6852, 0.8968), (0.1801, 6.1128, 2.2058)),
 )
+#: A car's positions: loops of 50-100 m at 0.008-0.04 Hz, 4 cm of bumps at 0.4-0.9 Hz.
+CAR_SINES = (
+    ((31.9739, 0.2456, 0.1372), (42.9665, 0.0526, 0.1493), (23.6169, 0.0981, 1.3290)),
+    ((56.9275, 0.2338, 1.5501), (43.3916, 0.1459, 0.8443), (49.3930, 0.1167, 2.5929)),
+    ((0.0347, 2.5926, 2.9361), (0.0387, 5.5356, 2.9064)),
+)
 
 
-def hand_positions(t, r=0):
-    """The r-th derivative (0 or 2) of the :data:`HAND_SINES` positions, (N, 3)."""
+def sine_positions(t, table=HAND_SINES, r=0):
+    """The r-th derivative (0 or 2) of positions given as sums of sines per axis, (N, 3)."""
     sign = 1.0 if r == 0 else -1.0
-    return np.column_stack([sum(sign * a * w**r * np.sin(w * t + ph) for a, w, ph in axis) for axis in HAND_SINES])
+    return np.column_stack([sum(sign * a * w**r * np.sin(w * t + ph) for a, w, ph in axis) for axis in table])

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from fit_scenes import hand_positions
+from fit_scenes import sine_positions
 
 from splineimu.spline import crossval, knots
 from splineimu.spline import surrogate as sur
@@ -83,7 +83,7 @@ def test_slow_motion_leaking_into_the_top_octave_is_not_taken_for_motion(seed):
     noise does (0.16x): noise. The exact positions stay motion-limited (their tapered top octave
     is rounding), and so does the flips scene at 20 Hz."""
     t = np.arange(0.0, 60.0 + 1e-9, 0.05)
-    X = hand_positions(t)
+    X = sine_positions(t)
     noisy = X + 2e-4 * np.random.default_rng(seed).normal(size=X.shape)
     plain, _ = sur._falls(sur.band_power(np.diff(noisy, 2, axis=0)))
     assert plain  # what the plain reading alone decided

@@ -81,6 +81,8 @@ Method
    with 0.02 deg / 0.2 mm, 0.0017 for 0.020 and accel 0.078 for 0.54, now 0.017 and 0.71; fast
    hand-held sums of sines 0.08-0.22x the measured before, 0.81-1.9x now; EuRoC V1_02's 20 Hz
    vicon2gt accel 0.018 m/s^2, now 0.128, against 0.116 low-passed against its real IMU.
+   Knots finer than the poses where the top of the band reads as noise (the held-out fits
+   interpolated noise correlated over neighbouring poses) are read the same way.
 5. The rotation spacing never exceeds the time in which the input turns by 135 degrees
    (:func:`max_rotation_spacing`): further apart, neighbouring control rotations near the
    opposite turn. Fast smooth rotation is best close to it (the flips scene, 17 rad/s, AR(1)
@@ -353,7 +355,7 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
     # 1. cross-validation with 0.1 s blocks, then with blocks of 3 noise correlation times
     limited = dt_fixed is None and all(motion_limited(wd.X) for wd in windows)
     least = 1 if limited or dt_fixed is not None else min(MIN_FIRST_BLOCK, int(round(0.2 / h)))
-    block = max(least, 1, int(round(0.1 / h)))
+    block = first_block = max(least, 1, int(round(0.1 / h)))
     k_first = 4 if 4 in orders else orders[0]
     table = _search(windows, (k_first,), grid, block, lo, hi)
     k0, dt0, _ = _best(table, (k_first,))
@@ -458,15 +460,22 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
         # table, six-position scenes); it is continued flat here
         v0, b0, _ = _ladder_errors(windows, k, np.array([dt / _LADDER, dt]), noises if flat is None else flat, 0)
         out["value_rms"] = float(np.sqrt(v0[0] + b0[0]))
-    if limited:
+    # knots finer than the poses where the top of the band reads as noise: the held-out fits
+    # interpolated noise correlated over neighbouring poses (drawn at a lower rate and
+    # interpolated: car and drone motion at 20 Hz, knots 35 ms, predicted 0.03-0.05x the
+    # measured), read as for motion-limited input
+    if limited or (dt_fixed is None and dt < h):
         # the prediction took the top of the band for motion (a tenth of the surrogate). Held-out
         # blocks twice as long tell: motion's error grows steeply with the gap, noise's barely.
         # Where it may be noise, the derivative's error at the choice were the held-out error
         # white noise (flips scene at 20 Hz, 0.1 deg noise: predicted gyro 0.001 rad/s,
         # measured 0.098, this 0.15)
         den = max(sum(wd.n_scored for wd in windows), 1)
-        held = [table[(k, dt_cv)]] + [sum(wd.score(k, dt_cv, wd.folds(m * block))[0] for wd in windows) / den
-                                      for m in (2, 3)]
+        # (interpolated noise is read in blocks as long as the first pass's: shorter ones leave
+        # part of each held-out pose's noise in its neighbours)
+        b = block if limited else max(block, first_block)
+        held = [table[(k, dt_cv)] if b == block else sum(wd.score(k, dt_cv, wd.folds(b))[0] for wd in windows) / den]
+        held += [sum(wd.score(k, dt_cv, wd.folds(m * b))[0] for wd in windows) / den for m in (2, 3)]
         growth = held[1] / max(held[0], 1e-300)
         if 1.0 / 3.0 < growth < NOISE_GROWTH:
             rng = np.random.default_rng(11)
@@ -478,8 +487,8 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
             # the noise under the motion: the held-out errors at three gap lengths as noise plus
             # motion growing as a power of the gap, the noise part through the leave-out gain of
             # white noise, and its derivative's error at the choice added to the prediction
-            gain = sum(wd.score(k, dt_cv, wd.folds(block), u)[0] for wd, u in zip(windows, unit)) / den
-            sigma = np.sqrt(noise_under_motion(held, block) / gain) if gain > 0 else 0.0
+            gain = sum(wd.score(k, dt_cv, wd.folds(b), u)[0] for wd, u in zip(windows, unit)) / den
+            sigma = np.sqrt(noise_under_motion(held, b) / gain) if gain > 0 else 0.0
             for key in ("predicted_rms", "end_predicted_rms", "predicted_noise_rms"):
                 out[key] = float(np.sqrt(out[key] ** 2 + vu * sigma**2))
             out["noise_under_motion"] = float(sigma)
@@ -535,6 +544,7 @@ def prediction_warnings(choice, t):
     if choice is None:
         return []
     out = []
+    h = float(np.median(np.diff(t))) if len(t) > 1 else 0.0
     g, a = choice["predicted_gyro_rms_rad_s"], choice["predicted_accel_rms_m_s2"]
     if g > WARN_GYRO_RAD_S or a > WARN_ACCEL_M_S2:
         out.append(FitWarning("predicted_error_high", f"predicted error of the synthesized IMU is gyro ~{g:.3g} rad/s, "
@@ -544,11 +554,16 @@ def prediction_warnings(choice, t):
                                  ("position", "accel", "m/s^2", WARN_ACCEL_M_S2)):
         c = choice[key]
         if c.get("predicted_rms_if_noise", 0.0) > 3.0 * c["predicted_rms"]:
+            dt = 1e3 * c["knot_spacing_s"]
+            what, noise = ((f"the top octave of the {key} poses was taken for motion (knots {dt:.3g} ms follow it, ",
+                            "pose noise") if c["motion_limited"] else
+                           (f"the {key} knots ({dt:.3g} ms) are finer than the poses (every {1e3 * h:.3g} ms) and "
+                            "take their finest detail for motion (", "pose noise correlated over neighbouring poses "
+                            "(as in interpolated input)"))
             out.append(FitWarning(
-                "prediction_assumes_motion", f"the top octave of the {key} poses was taken for motion (knots "
-                f"{1e3 * c['knot_spacing_s']:.3g} ms follow it, predicted {name} error ~{c['predicted_rms']:.3g} "
-                f"{unit}); if it holds pose noise, the {name} error is up to ~{c['predicted_rms_if_noise']:.3g} "
-                f"{unit} (a coarser knot spacing smooths it)"))
+                "prediction_assumes_motion", f"{what}predicted {name} error ~{c['predicted_rms']:.3g} {unit}); if it "
+                f"is {noise}, the {name} error is up to ~{c['predicted_rms_if_noise']:.3g} {unit} (a coarser knot "
+                "spacing smooths it)"))
         if c["end_predicted_rms"] > max(3.0 * c["predicted_rms"], lim):
             z = c["end_zone_s"]
             out.append(FitWarning("ends_less_accurate", f"the first and last {z:.3f} s are less accurate ({name} "
