@@ -198,6 +198,8 @@ def test_ends_of_exact_low_rate_input_are_predicted(rate_hz):
     # warned where the ends' accel is off by more than 1 m/s^2 (and the prediction says so)
     assert bool(warned) == (c["end_predicted_rms"] > 1.0), [w.message for w in rep.warnings]
     assert warned or ends < 1.0
+    if rate_hz == 20.0:  # its top octave is rounding: blocks of 0.1 s, not of 4 poses (ends 11 m/s^2)
+        assert ends < 0.5, ends  # 0.21
 
 
 def test_separate_grids_are_reported():

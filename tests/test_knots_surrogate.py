@@ -95,6 +95,18 @@ def test_slow_motion_leaking_into_the_top_octave_is_not_taken_for_motion(seed):
     assert sur.motion_limited(flips + 2e-4 * np.random.default_rng(seed).normal(size=X.shape))
 
 
+def test_rounding_only_top_octave_is_exact_input():
+    """The ellipse scene's exact positions at 20 Hz are not motion-limited (one sinusoid, the
+    top octave of their second differences rounding), but not noisy either: their tapered top
+    octave is 4e-15 of the mean power. Noise of 1 um is 1e-3 of it."""
+    from splineimu.scenes import make_scene
+
+    t = np.arange(0.0, 60.0 + 1e-9, 0.05)
+    X = make_scene("ellipse", duration_s=60.0).kinematics(t).position_world
+    assert not sur.motion_limited(X) and sur.rounding_only(X)
+    assert not sur.rounding_only(X + 1e-6 * np.random.default_rng(0).normal(size=X.shape))
+
+
 def test_cut_off_near_zero_hz_is_not_smeared_onto_it():
     """A long window at a high rate and a coarse fit: 60 s at 1 kHz with 1 s knots puts the
     cut-off near bin 30, and the default smoothing (117 bins) read the transfer 0.2 at 0 Hz: no

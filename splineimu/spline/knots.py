@@ -134,7 +134,7 @@ from ..errors import SplineImuError
 from .crossval import _STEP, _correlation_lag, _search, _windows
 from .report import WARN_ACCEL_M_S2, WARN_GYRO_RAD_S, FitWarning
 from .signals import MAX_CONTROL_TURN_RAD, anchor_block, max_rotation_spacing, rotation_increments
-from .surrogate import motion_limited, noise_surrogates, noise_under_motion
+from .surrogate import motion_limited, noise_surrogates, noise_under_motion, rounding_only
 from .zones import end_bias2, find_gaps, gap_predictions
 
 ORDERS = (4, 5, 6)
@@ -166,9 +166,10 @@ NOISE_GROWTH = 12.0
 #: noise: noise correlated over two poses (drawn at half the rate and interpolated) is partly
 #: predicted from a neighbour left in by 2-pose blocks (0.1 s at 20 Hz), which then chose to
 #: interpolate it (slow motion at 20 Hz: gyro 13-21x, accel 59-80x the best fixed setting).
-#: Not beyond 0.2 s (the exact ellipse at 2 and 5 Hz, non-motion-limited: blocks of 2 s and
-#: 0.4 s moved the choice, its ends' accel error 7.0 m/s^2 for 0.6 predicted), nor for
-#: motion-limited input.
+#: Only where 4 poses last 0.2 s at most (from 20 Hz; exact poses at 2-10 Hz, whose top octave
+#: holds motion beyond their Nyquist frequency, read as noise: 0.2-2 s blocks moved their choice,
+#: fast hand-held at 10 Hz gyro 0.41 -> 1.9 rad/s), and not where the top octave is motion or
+#: rounding (exact ellipse positions at 20 Hz: ends' accel error 0.2 -> 11 m/s^2).
 MIN_FIRST_BLOCK = 4
 #: Standard gravity [m/s^2], for the accelerometer error an orientation error causes.
 GRAVITY_M_S2 = 9.81
@@ -354,8 +355,13 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
         grid = np.array([float(dt_fixed)])
     # 1. cross-validation with 0.1 s blocks, then with blocks of 3 noise correlation times
     limited = dt_fixed is None and all(motion_limited(wd.X) for wd in windows)
-    least = 1 if limited or dt_fixed is not None else min(MIN_FIRST_BLOCK, int(round(0.2 / h)))
-    block = first_block = max(least, 1, int(round(0.1 / h)))
+
+    def noisy():  # the top of the band holds noise: neither motion nor rounding (exact input)
+        return not limited and not all(rounding_only(wd.X) for wd in windows)
+
+    block = first_block = max(int(round(0.1 / h)), 1)
+    if dt_fixed is None and block < MIN_FIRST_BLOCK and MIN_FIRST_BLOCK * h <= 0.2 * (1 + 1e-9) and noisy():
+        block = first_block = MIN_FIRST_BLOCK
     k_first = 4 if 4 in orders else orders[0]
     table = _search(windows, (k_first,), grid, block, lo, hi)
     k0, dt0, _ = _best(table, (k_first,))
@@ -464,7 +470,7 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
     # interpolated noise correlated over neighbouring poses (drawn at a lower rate and
     # interpolated: car and drone motion at 20 Hz, knots 35 ms, predicted 0.03-0.05x the
     # measured), read as for motion-limited input
-    if limited or (dt_fixed is None and dt < h):
+    if limited or (dt_fixed is None and dt < h and noisy()):
         # the prediction took the top of the band for motion (a tenth of the surrogate). Held-out
         # blocks twice as long tell: motion's error grows steeply with the gap, noise's barely.
         # Where it may be noise, the derivative's error at the choice were the held-out error

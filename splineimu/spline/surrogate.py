@@ -66,11 +66,22 @@ def motion_limited(X):
     falls, _ = _falls(band_power(d))
     if not falls:
         return False
-    # (the mean removed before the taper only: removing it after would add back the plain
-    # window's leakage)
-    d = (d - d.mean(axis=0)) * np.hanning(d.shape[0])[:, None]
-    tapered, share = _falls((np.abs(np.fft.rfft(d, fast_len(d.shape[0]), axis=0)) ** 2).sum(axis=1))
+    tapered, share = _tapered(d)
     return tapered or share < _ROUNDING_SHARE
+
+
+def _tapered(d):
+    """:func:`_falls` of the Hann-tapered periodogram of d (the mean removed before the taper
+    only: removing it after would add back the plain window's leakage)."""
+    d = (d - d.mean(axis=0)) * np.hanning(d.shape[0])[:, None]
+    return _falls((np.abs(np.fft.rfft(d, fast_len(d.shape[0]), axis=0)) ** 2).sum(axis=1))
+
+
+def rounding_only(X):
+    """True when the top octave of X's second differences is at rounding level (tapered, below
+    :data:`_ROUNDING_SHARE` of their mean power): exact input, whatever the plain reading says
+    (the ellipse scene's exact positions at 20 Hz read as noise there: one sinusoid and rounding)."""
+    return X.shape[0] >= 64 and bool(_tapered(np.diff(X, 2, axis=0))[1] < _ROUNDING_SHARE)
 
 
 def noise_spectrum(wd, k, dt_cv, rng):
