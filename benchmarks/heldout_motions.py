@@ -3,7 +3,7 @@
 The knot choice was tuned on the analytic scenes (ellipse, circle, screw, flips, six-position,
 rate-table). This draws other motions (ZYX Euler angles and positions as sums of sines, exact
 derivatives through ``splineimu.scenes.kinematics``), adds white, AR(1) (30 ms) or upsampled pose
-noise (as tests/fit_scenes.py), and compares the automatic fit with the best of a fixed grid
+noise (as tests/fit_scenes.py) or resamples noisy poses from half the rate (``interpolated``), and compares the automatic fit with the best of a fixed grid
 (orders 4-6 x 19 spacings 5 ms-2.56 s, one spacing for rotation and position) per quantity:
 gyro against the best-gyro setting, accelerometer against the best-accel one, plus the predicted
 error over the measured one. Errors are RMS over [1 s, end - 1 s] at 200 Hz.
@@ -95,16 +95,34 @@ def _errors(scene, spl, duration):
             float(np.sqrt(np.mean(np.sum((f - f0) ** 2, axis=1)))))
 
 
+def _interpolated(scene, t, pos_noise_m, angle_noise_rad, rng):
+    """Positions and quaternions at ``t`` from noisy poses at every other instant: positions
+    interpolated linearly, rotations along the geodesic (as an exported trajectory resampled
+    to a higher rate)."""
+    coarse = t[::2]
+    k = scene.kinematics(coarse)
+    pc = k.position_world + pos_noise_m * rng.normal(size=(coarse.size, 3))
+    Rc = k.world_R_body @ lie.so3_exp(angle_noise_rad * rng.normal(size=(coarse.size, 3)))
+    p = np.column_stack([np.interp(t, coarse, pc[:, j]) for j in range(3)])
+    i = np.minimum(np.searchsorted(coarse, t, side="right") - 1, coarse.size - 2)
+    u = ((t - coarse[i]) / (coarse[i + 1] - coarse[i]))[:, None]
+    step = lie.so3_log(np.swapaxes(Rc[i], 1, 2) @ Rc[i + 1])
+    return p, lie.matrix_to_quat_xyzw(Rc[i] @ lie.so3_exp(u * step))
+
+
 def case(motion, draw, kind, rate, pos_noise_m, angle_noise_deg, duration=60.0, seed=1):
     """One row: auto / best fixed per quantity, predicted / measured, the choice and warnings."""
     scene = SumOfSines(duration_s=duration)
     scene.tables = _tables(motion, draw)
     t = np.arange(0.0, duration + 1e-9, 1.0 / rate)
-    k = scene.kinematics(t)
     rng = np.random.default_rng(seed)
-    p = k.position_world + noise(kind, t.size, rate, pos_noise_m, rng)
-    R = k.world_R_body @ lie.so3_exp(noise(kind, t.size, rate, np.radians(angle_noise_deg), rng))
-    q = lie.matrix_to_quat_xyzw(R)
+    if kind == "interpolated":  # poses (motion and white noise) at half the rate, interpolated
+        p, q = _interpolated(scene, t, pos_noise_m, np.radians(angle_noise_deg), rng)
+    else:
+        k = scene.kinematics(t)
+        p = k.position_world + noise(kind, t.size, rate, pos_noise_m, rng)
+        R = k.world_R_body @ lie.so3_exp(noise(kind, t.size, rate, np.radians(angle_noise_deg), rng))
+        q = lie.matrix_to_quat_xyzw(R)
     grid = [_errors(scene, fit(t, p, q, order=o, knot_spacing_s=float(dt), reject_outliers=False), duration)
             for o in (4, 5, 6) for dt in np.geomspace(0.005, 2.56, 19)]
     spl, rep = fit(t, p, q, return_report=True)
@@ -121,7 +139,10 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--motions", nargs="+", default=list(MOTIONS), choices=MOTIONS)
     ap.add_argument("--draws", nargs="+", type=int, default=[1, 2])
-    ap.add_argument("--kinds", nargs="+", default=["white", "ar1", "upsampled"], choices=["white", "ar1", "upsampled"])
+    ap.add_argument("--kinds", nargs="+", default=["white", "ar1", "upsampled"],
+                    choices=["white", "ar1", "upsampled", "interpolated"],
+                    help="pose noise: white, AR(1) 30 ms, drawn at half the rate and interpolated (upsampled), or "
+                         "whole poses at half the rate with white noise, interpolated (interpolated)")
     ap.add_argument("--rate", type=float, default=200.0, help="pose rate [Hz] (default 200)")
     ap.add_argument("--noise", nargs=2, type=float, default=[1e-3, 0.1], metavar=("M", "DEG"),
                     help="pose noise per axis: position [m] and angle [deg] (default 1e-3 0.1)")
