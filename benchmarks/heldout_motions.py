@@ -3,8 +3,9 @@
 The knot choice was tuned on the analytic scenes (ellipse, circle, screw, flips, six-position,
 rate-table). This draws other motions (ZYX Euler angles and positions as sums of sines, exact
 derivatives through ``splineimu.scenes.kinematics``), adds white, AR(1) (30 ms) or upsampled pose
-noise (as tests/fit_scenes.py) or resamples noisy poses from half the rate (``interpolated``), and compares the automatic fit with the best of a fixed grid
-(orders 4-6 x 19 spacings 5 ms-2.56 s, one spacing for rotation and position) per quantity:
+noise (as tests/fit_scenes.py) or resamples noisy poses from half the rate (``interpolated``),
+and compares the automatic fit with the best of a fixed grid (orders 4-6 x 19 spacings 5 ms-2.56
+s, one spacing for rotation and position) per quantity:
 gyro against the best-gyro setting, accelerometer against the best-accel one, plus the predicted
 error over the measured one. Errors are RMS over [1 s, end - 1 s] at 200 Hz.
 
