@@ -14,7 +14,8 @@ Method
    prediction error away from the ends. The grid runs from 0.7x the median pose spacing (no
    floor at twice the pose spacing) to a quarter of the span or :data:`MAX_SPACING_S` (10 s),
    coarse steps of 1.6x and a finer step around the best. The block length comes from the
-   data: a first pass with 0.1 s blocks, whose residual gives the noise correlation time (the
+   data: a first pass with 0.1 s blocks (:data:`MIN_FIRST_BLOCK` poses at least from 20 Hz where
+   the top octave holds noise), whose residual gives the noise correlation time (the
    lag where its autocorrelation falls below 0.1); blocks of 3 correlation times (1 pose for
    white noise) then keep correlated or upsampled noise of a held-out block independent of its
    training neighbours.
@@ -356,7 +357,8 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
             grid = np.r_[grid, np.geomspace(top, hi, int(np.ceil(np.log(hi / top) / np.log(step))) + 1)[1:]]
     else:
         grid = np.array([float(dt_fixed)])
-    # 1. cross-validation with 0.1 s blocks, then with blocks of 3 noise correlation times
+    # 1. cross-validation with 0.1 s blocks (or MIN_FIRST_BLOCK), then with blocks of 3 noise
+    # correlation times
     limited = dt_fixed is None and all(motion_limited(wd.X) for wd in windows)
 
     def noisy():  # the top of the band holds noise: neither motion nor rounding (exact input)
