@@ -128,6 +128,8 @@ taken as noise-limited.
 
 from __future__ import annotations
 
+from functools import cache
+
 import numpy as np
 
 from .._kernels import cv as _kcv
@@ -166,15 +168,14 @@ WALK_MAX_S = 0.05
 #: hand-held rotation near the Nyquist frequency, whose prediction is 0.25x the measured (told
 #: too). EuRoC's and OpenVINS' 200 Hz and 20 Hz ground truth: the same warnings with 5 or 12.
 NOISE_GROWTH = 12.0
-#: The least block of the first cross-validation pass [poses] where the top of the band holds
-#: noise: noise correlated over two poses (drawn at half the rate and interpolated) is partly
-#: predicted from a neighbour left in by 2-pose blocks (0.1 s at 20 Hz), which then chose to
-#: interpolate it (slow motion at 20 Hz: gyro 13-21x, accel 59-80x the best fixed setting).
-#: Only where 4 poses last 0.2 s at most (from 20 Hz; exact poses at 2-10 Hz, whose top octave
-#: holds motion beyond their Nyquist frequency, read as noise: 0.2-2 s blocks moved their choice,
-#: fast hand-held at 10 Hz gyro 0.41 -> 1.9 rad/s), and not where the top octave is motion or
-#: rounding (exact ellipse positions at 20 Hz: ends' accel error 0.2 -> 11 m/s^2).
+#: The least first cross-validation block [poses] where the top octave holds noise, and the
+#: most time it may span [s]: noise drawn at half the rate and interpolated is partly predicted
+#: from a neighbour left in by 2-pose blocks (0.1 s at 20 Hz), which then interpolated it (slow
+#: motion at 20 Hz: gyro 13-21x, accel 59-80x the best fixed setting). Not longer (exact poses
+#: at 10 Hz, aliased motion read as noise: fast hand-held gyro 0.41 -> 1.9 rad/s), nor where the
+#: top octave is rounding (exact ellipse positions at 20 Hz: ends' accel 0.2 -> 11 m/s^2).
 MIN_FIRST_BLOCK = 4
+MIN_FIRST_BLOCK_S = 0.2
 #: Standard gravity [m/s^2], for the accelerometer error an orientation error causes.
 GRAVITY_M_S2 = 9.81
 #: The coarsest knot spacing tried (and a quarter of the span): slow or still motion (a rate
@@ -361,11 +362,13 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
     # correlation times
     limited = dt_fixed is None and all(motion_limited(wd.X) for wd in windows)
 
+    @cache
     def noisy():  # the top of the band holds noise: neither motion nor rounding (exact input)
         return not limited and not all(rounding_only(wd.X) for wd in windows)
 
     block = first_block = max(int(round(0.1 / h)), 1)
-    if dt_fixed is None and block < MIN_FIRST_BLOCK and MIN_FIRST_BLOCK * h <= 0.2 * (1 + 1e-9) and noisy():
+    if (dt_fixed is None and block < MIN_FIRST_BLOCK and MIN_FIRST_BLOCK * h <= MIN_FIRST_BLOCK_S * (1 + 1e-9)
+            and noisy()):
         block = first_block = MIN_FIRST_BLOCK
     k_first = 4 if 4 in orders else orders[0]
     table = _search(windows, (k_first,), grid, block, lo, hi)
@@ -425,7 +428,7 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
         first = max(int(np.argmax(ok)) - 1, 0)
         ladder = np.r_[ladder[first], ladder[first + 1:][ok[first + 1:]]]
         if dt_fixed is None:
-            top = ladder[-1] if limited else (hi if dt_cv >= walk_cap else max(ladder[-1], min(hi, walk_cap)))
+            top = ladder[-1] if limited else max(ladder[-1], hi_k)
             ladder, var, bias2, ends = _walk_ladder(windows, k, ladder, noises, r, lo_k, top, bias_lag)
         else:
             var, bias2, ends = _ladder_errors(windows, k, ladder, noises, r, bias_lag)
@@ -472,22 +475,22 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
         # table, six-position scenes); it is continued flat here
         v0, b0, _ = _ladder_errors(windows, k, np.array([dt / _LADDER, dt]), noises if flat is None else flat, 0)
         out["value_rms"] = float(np.sqrt(v0[0] + b0[0]))
-    # knots finer than the poses where the top of the band reads as noise: the held-out fits
-    # interpolated noise correlated over neighbouring poses (drawn at a lower rate and
-    # interpolated: car and drone motion at 20 Hz, knots 35 ms, predicted 0.03-0.05x the
-    # measured), read as for motion-limited input
+    # knots finer than the poses where the top octave reads as noise (the held-out fits took
+    # interpolated noise for motion: car and drone at 20 Hz, predicted 0.03-0.05x): read alike
     if limited or (dt_fixed is None and dt < h and noisy()):
         # the prediction took the top of the band for motion (a tenth of the surrogate). Held-out
-        # blocks twice as long tell: motion's error grows steeply with the gap, noise's barely.
-        # Where it may be noise, the derivative's error at the choice were the held-out error
-        # white noise (flips scene at 20 Hz, 0.1 deg noise: predicted gyro 0.001 rad/s,
-        # measured 0.098, this 0.15)
+        # blocks twice as long tell: motion's error grows steeply with the gap, noise's barely;
+        # where it may be noise, the error if the held-out error were white noise is given too
         den = max(sum(wd.n_scored for wd in windows), 1)
+
+        def held_out(blk, noise=None):  # mean squared held-out error of the signal (or of noise)
+            noise = noise or [None] * len(windows)
+            return sum(wd.score(k, dt_cv, wd.folds(blk), nz)[0] for wd, nz in zip(windows, noise)) / den
+
         # (interpolated noise is read in blocks as long as the first pass's: shorter ones leave
         # part of each held-out pose's noise in its neighbours)
         b = block if limited else max(block, first_block)
-        held = [table[(k, dt_cv)] if b == block else sum(wd.score(k, dt_cv, wd.folds(b))[0] for wd in windows) / den]
-        held += [sum(wd.score(k, dt_cv, wd.folds(m * b))[0] for wd in windows) / den for m in (2, 3)]
+        held = [table[(k, dt_cv)] if b == block else held_out(b)] + [held_out(m * b) for m in (2, 3)]
         growth = held[1] / max(held[0], 1e-300)
         if 1.0 / 3.0 < growth < NOISE_GROWTH:
             rng = np.random.default_rng(11)
@@ -499,7 +502,7 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
             # the noise under the motion: the held-out errors at three gap lengths as noise plus
             # motion growing as a power of the gap, the noise part through the leave-out gain of
             # white noise, and its derivative's error at the choice added to the prediction
-            gain = sum(wd.score(k, dt_cv, wd.folds(b), u)[0] for wd, u in zip(windows, unit)) / den
+            gain = held_out(b, unit)
             sigma = np.sqrt(noise_under_motion(held, b) / gain) if gain > 0 else 0.0
             for key in ("predicted_rms", "end_predicted_rms", "predicted_noise_rms"):
                 out[key] = float(np.sqrt(out[key] ** 2 + vu * sigma**2))

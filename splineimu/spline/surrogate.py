@@ -33,10 +33,15 @@ def fast_len(n):
     return best
 
 
-def band_power(d):
+def band_power(d, taper=False):
     """Periodogram (summed over the columns) of the rows of d less their mean, zero-padded to
-    :func:`fast_len` (band powers over octaves are those of the unpadded series, smoothed)."""
-    return (np.abs(np.fft.rfft(d - d.mean(axis=0), fast_len(d.shape[0]), axis=0)) ** 2).sum(axis=1)
+    :func:`fast_len` (band powers over octaves are those of the unpadded series, smoothed);
+    with ``taper``, of the centred rows times a Hann window (centred before the taper only:
+    centring after would add back the plain window's leakage)."""
+    d = d - d.mean(axis=0)
+    if taper:
+        d = d * np.hanning(d.shape[0])[:, None]
+    return (np.abs(np.fft.rfft(d, fast_len(d.shape[0]), axis=0)) ** 2).sum(axis=1)
 
 
 def _falls(P):
@@ -66,22 +71,15 @@ def motion_limited(X):
     falls, _ = _falls(band_power(d))
     if not falls:
         return False
-    tapered, share = _tapered(d)
+    tapered, share = _falls(band_power(d, taper=True))
     return tapered or share < _ROUNDING_SHARE
-
-
-def _tapered(d):
-    """:func:`_falls` of the Hann-tapered periodogram of d (the mean removed before the taper
-    only: removing it after would add back the plain window's leakage)."""
-    d = (d - d.mean(axis=0)) * np.hanning(d.shape[0])[:, None]
-    return _falls((np.abs(np.fft.rfft(d, fast_len(d.shape[0]), axis=0)) ** 2).sum(axis=1))
 
 
 def rounding_only(X):
     """True when the top octave of X's second differences is at rounding level (tapered, below
     :data:`_ROUNDING_SHARE` of their mean power): exact input, whatever the plain reading says
     (the ellipse scene's exact positions at 20 Hz read as noise there: one sinusoid and rounding)."""
-    return X.shape[0] >= 64 and bool(_tapered(np.diff(X, 2, axis=0))[1] < _ROUNDING_SHARE)
+    return X.shape[0] >= 64 and bool(_falls(band_power(np.diff(X, 2, axis=0), taper=True))[1] < _ROUNDING_SHARE)
 
 
 def noise_spectrum(wd, k, dt_cv, rng):
