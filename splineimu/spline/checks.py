@@ -236,6 +236,62 @@ def stamp_warnings(t, P, theta):
         "times", a, b)]
 
 
+#: Poses count as resampled by interpolation when, for one phase modulo m of the uniformly spaced
+#: poses, the squared second differences of the others (their upper quartile) are below this
+#: share of that phase's (its lower quartile), for position and rotation alike
+#: (:func:`interpolated_poses`).
+INTERPOLATED_SHARE = 0.01
+_INTERPOLATION_FACTORS = (5, 4, 3, 2)
+
+
+def interpolated_poses(t, P, theta):
+    """Poses that lie on the straight line (or geodesic) through their neighbours, every m-th
+    pose carrying the data: ``(m, mask)`` of those poses, or None.
+
+    A trajectory exported at one rate and resampled to a higher one (mocap at 100 Hz written at
+    200 Hz, a 10 Hz estimate interpolated to 20 Hz) has second differences at the interpolated
+    poses of the motion alone, and of the noise too at the others. The choice cross-validates
+    held-out poses, and an interpolated pose is predicted by the two it was made from: it read
+    the interpolation as motion (poses at 10 Hz interpolated to 20 Hz: fast hand-held accel
+    5.5-7.4x the best fixed setting, predicted 0.04x). Judged on the uniformly spaced poses
+    (within 1% of the median spacing) by quartiles per phase, so that a few glitches do not
+    count (a phase of m = 3 on poses resampled 2x holds both kinds: its quartiles differ),
+    largest m first; a phase whose second differences are at rounding level (exact or piecewise
+    linear motion) is not judged. The share measured 3.1-150 on real ground truth (EuRoC,
+    TUM-VI, TUM RGB-D, OpenVINS' files, 21 BROAD trials), 1.0 and above on sampled analytic
+    motion (16 scenes at 2 Hz-1 kHz, exact, white or AR(1) noise), 6.5e-20 at most on resampled
+    poses (20-200 Hz); noise resampled onto exact motion is found where
+    the motion's own second differences are below the noise's (200 Hz from 100 Hz: 8 of 16
+    motions)."""
+    n = t.size
+    if n < 64:
+        return None
+    dt = np.diff(t)
+    h = float(np.median(dt))
+    uniform = np.abs(dt - h) <= 0.01 * h
+    ok = np.zeros(n, dtype=bool)
+    ok[1:-1] = uniform[:-1] & uniform[1:]
+    idx = np.arange(n)
+    for m in _INTERPOLATION_FACTORS:
+        phases = set()
+        for Y in (P, theta):
+            e = np.zeros(n)
+            e[1:-1] = np.sum((Y[2:] - 2.0 * Y[1:-1] + Y[:-2]) ** 2, axis=1)
+            sel = [ok & (idx % m == f) for f in range(m)]
+            if min(np.count_nonzero(s) for s in sel) < 8:
+                return None
+            lo, hi = np.array([np.percentile(e[s], (25, 75)) for s in sel]).T
+            c = int(np.argmax(lo))
+            floor = (64.0 * np.finfo(float).eps * max(float(np.max(np.abs(Y))), 1.0)) ** 2
+            if not lo[c] > floor or np.max(np.delete(hi, c)) > INTERPOLATED_SHARE * lo[c]:
+                break
+            phases.add(c)
+        else:
+            if len(phases) == 1:
+                return m, ok & (idx % m != phases.pop())
+    return None
+
+
 #: Window x samples up to which the running median runs in the kernel (a few ms); beyond, in
 #: scipy.ndimage (O(N log w)), whose import (0.04-0.2 s) is then small next to the fit.
 KERNEL_MEDIAN_MAX_WORK = 2e7

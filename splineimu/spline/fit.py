@@ -37,6 +37,7 @@ from .checks import (
     classify_residuals,
     dropped_warning,
     input_warnings,
+    interpolated_poses,
     resolve_setting,
     rotation_flips,
     singular_message,
@@ -54,6 +55,15 @@ from .surrogate import prediction_at_spacing
 
 #: Poses (the middle ones) on which the rotation spline's bias is checked (:func:`_rotation_bias`).
 BIAS_CHECK_POSES = 2000
+
+
+#: Poses resampled by interpolation (:func:`.checks.interpolated_poses`) are chosen and fitted
+#: without the interpolated ones where the automatic choice put either knot spacing within this
+#: many spacings of the poses they were made from (10 Hz poses at 20 Hz: knots of 35-280 ms, fast
+#: hand-held accel 5.5-7.4x the best fixed setting, predicted 0.04x). Not coarser: at 200 Hz from
+#: 100 Hz the choice is 4x or more and within the bars, and the 100 Hz poses alone read the
+#: six-position scene's noise as coloured (gyro 1.01 -> 1.65x the best).
+RESAMPLED_SPACINGS = 3.0
 
 
 def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="auto", *, position_order=None,
@@ -155,6 +165,10 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
         raise InputError(f"too few poses to fit: got {np.count_nonzero(w)} with a positive weight, need at least 3")
     gap_warnings = check_rotation_steps(t, R, np.flatnonzero(~flips))
     given = (r_order, r_dt, p_order, p_dt)
+    theta = np.zeros((t.size, 3))  # accumulated body-frame increments (signals.rotation_signal)
+    _gn.quat_increments(q, theta[1:])
+    np.cumsum(theta, axis=0, out=theta)
+    chosen_on = slice(None)  # the poses the knot choice sees
     if "auto" in given:
         check_stamp_clusters(t)
     source = "auto" if isinstance(knot_spacing_s, str) else "given"
@@ -165,7 +179,8 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
         ro, rdt, po, pdt = given
         ch = None
         if "auto" in given:
-            ch = choose_knot_spacing(t, P, R, wts, ro, po, None if rdt == "auto" else rdt,
+            on = chosen_on
+            ch = choose_knot_spacing(t[on], P[on], R[on], wts[on], ro, po, None if rdt == "auto" else rdt,
                                      None if pdt == "auto" else pdt, turn)
             ro, rdt = ch["rotation"]["order"], ch["rotation"]["knot_spacing_s"]
             po, pdt = ch["position"]["order"], ch["position"]["knot_spacing_s"]
@@ -192,6 +207,21 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
         return ch, ro, lay_r, po, lay_p, sig
 
     choice, r_order, lay_r, p_order, lay_p, (sig_r, sig_p) = settings(w)
+    resampled = interpolated_poses(t, P, theta) if choice is not None else None
+    if resampled is not None:
+        m, between = resampled
+        h = float(np.median(np.diff(t)))
+        if min(lay_r[1], lay_p[1]) < RESAMPLED_SPACINGS * m * h:
+            # knots that close to the poses the others were interpolated from bend at them: the
+            # held-out fits took the interpolation for motion. Chosen and fitted without those
+            w = np.where(between, 0.0, w)
+            chosen_on = np.flatnonzero(~between)
+            choice, r_order, lay_r, p_order, lay_p, (sig_r, sig_p) = settings(w)
+            gap_warnings.append(FitWarning(
+                "poses_interpolated", f"{np.count_nonzero(between)} of {t.size} poses lie on the straight line through "
+                f"their neighbours (a trajectory resampled from {1.0 / (m * h):.3g} Hz to {1.0 / h:.3g} Hz?): the "
+                f"fit follows the other {t.size - np.count_nonzero(between)}, and no motion above "
+                f"{0.5 / (m * h):.3g} Hz is in the input"))
 
     bar = None
     if progress:
@@ -210,9 +240,6 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
 
     probs = problems(w)
     Rc0 = probs[0].initial_rotations()
-    theta = np.zeros((t.size, 3))  # accumulated body-frame increments (signals.rotation_signal)
-    _gn.quat_increments(q, theta[1:])
-    np.cumsum(theta, axis=0, out=theta)
     gap_warnings += stamp_warnings(t, P, theta)
     dropped = np.zeros(t.size, dtype=bool)
     warnings = []

@@ -1,0 +1,115 @@
+"""Poses resampled by interpolation (a trajectory exported at one rate and written at a higher
+one): found, and chosen and fitted on the poses that carry the data (spline/checks.py
+interpolated_poses)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from fit_scenes import HAND_SINES, noise, sine_positions
+
+from splineimu import fit, lie
+from splineimu._kernels import gauss_newton as _gn
+from splineimu.io.euroc import read_euroc_groundtruth
+from splineimu.io.tum import read_tum
+from splineimu.spline.checks import interpolated_poses
+
+DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
+#: Hand-held motion twice as fast (0.8-2.6 Hz): sampled at 10 Hz it is near the Nyquist rate.
+FAST_SINES = tuple(tuple((a, 2.0 * w, ph) for a, w, ph in axis) for axis in HAND_SINES)
+
+
+def _theta(quat_xyzw):
+    """Accumulated body-frame increments of the rotation, as the fit takes them."""
+    q = np.ascontiguousarray(np.asarray(quat_xyzw)[:, [3, 0, 1, 2]])
+    th = np.zeros((q.shape[0], 3))
+    _gn.quat_increments(q, th[1:])
+    return np.cumsum(th, axis=0)
+
+
+def _rotation(t):
+    return lie.so3_exp(0.5 * sine_positions(t, FAST_SINES))
+
+
+def _resampled(m, rate_hz=10.0, duration_s=60.0, seed=1):
+    """Noisy poses (1 mm / 0.1 deg) at ``rate_hz``, resampled m times as fast: positions
+    linearly, rotations along the geodesic. Returns (coarse t, p, R) and (t, p, quat)."""
+    rng = np.random.default_rng(seed)
+    tc = np.arange(0.0, duration_s + 1e-9, 1.0 / rate_hz)
+    pc = sine_positions(tc, FAST_SINES) + 1e-3 * rng.normal(size=(tc.size, 3))
+    Rc = _rotation(tc) @ lie.so3_exp(np.radians(0.1) * rng.normal(size=(tc.size, 3)))
+    t = np.arange((tc.size - 1) * m + 1) / (m * rate_hz)
+    p = np.column_stack([np.interp(t, tc, pc[:, j]) for j in range(3)])
+    i = np.minimum(np.arange(t.size) // m, tc.size - 2)
+    u = (t - tc[i]) * rate_hz
+    R = Rc[i] @ lie.so3_exp(u[:, None] * lie.so3_log(np.swapaxes(Rc[i], 1, 2) @ Rc[i + 1]))
+    return (tc, pc, Rc), (t, p, lie.matrix_to_quat_xyzw(R))
+
+
+@pytest.mark.parametrize("m", [2, 3, 4])
+def test_interpolated_poses_are_found(m):
+    _, (t, p, q) = _resampled(m, duration_s=20.0)
+    found = interpolated_poses(t, p - p[0], _theta(q))
+    assert found is not None and found[0] == m
+    idx = np.arange(t.size)
+    # every pose between two data poses, away from the ends (whose neighbours are not both there)
+    assert np.array_equal(found[1][1:-1], (idx % m != 0)[1:-1])
+
+
+@pytest.mark.parametrize("kind", ["exact", "white", "ar1"])
+def test_measured_poses_are_not_taken_for_interpolated(kind):
+    """Motion and noise at every pose: sampled, not interpolated (the median squared second
+    difference of every phase within 0.8-1.2x the others' on these; the share for interpolated
+    poses is 1e-21 and below)."""
+    t = np.arange(0.0, 30.0 + 1e-9, 0.005)
+    rng = np.random.default_rng(2)
+    p = sine_positions(t, FAST_SINES)
+    R = _rotation(t)
+    if kind != "exact":
+        p = p + noise(kind, t.size, 200.0, 1e-3, rng)
+        R = R @ lie.so3_exp(noise(kind, t.size, 200.0, np.radians(0.1), rng))
+    assert interpolated_poses(t, p - p[0], _theta(lie.matrix_to_quat_xyzw(R))) is None
+    # still poses (second differences at rounding level) are not judged
+    still = np.zeros((t.size, 3))
+    assert interpolated_poses(t, still, still) is None
+
+
+@pytest.mark.parametrize("path, reader", [
+    ("euroc_V1_02_medium/groundtruth_vicon2gt_20hz.csv", read_euroc_groundtruth),
+    ("euroc_V1_02_medium/groundtruth.csv", read_euroc_groundtruth),
+    ("tum_vi/room1_512_16_groundtruth.tum", read_tum),
+])
+def test_real_ground_truth_is_not_taken_for_interpolated(path, reader):
+    if not (DATA / path).exists():
+        pytest.skip(f"{path} not in ../shared/data")
+    tr = reader(DATA / path)
+    t = (tr.t_ns - tr.t_ns[0]) * 1e-9
+    assert interpolated_poses(t, tr.positions - tr.positions[0], _theta(tr.quat_xyzw)) is None
+
+
+def test_interpolated_poses_are_fitted_as_the_poses_they_came_from():
+    """Fast hand-held poses at 10 Hz resampled to 20 Hz: the held-out fits read the
+    interpolation as motion (knots 119 ms and a synthesized accel 8.6 m/s^2 off, predicted 0.95,
+    nothing told). Chosen and fitted on the 10 Hz poses: the same spline as theirs (to
+    rounding), accel 0.68 m/s^2 off (predicted 0.43), and told."""
+    (tc, pc, Rc), (t, p, q) = _resampled(2)
+    spl, rep = fit(t, p, q, return_report=True)
+    ref = fit(tc, pc, lie.matrix_to_quat_xyzw(Rc))
+    te = np.arange(1.0, 59.0, 0.005)
+    (g, f), (g_ref, f_ref) = spl.imu(te), ref.imu(te)
+    assert np.abs(g - g_ref).max() < 1e-9 and np.abs(f - f_ref).max() < 1e-9
+    f0 = np.einsum("nji,nj->ni", _rotation(te), sine_positions(te, FAST_SINES, r=2) + [0.0, 0.0, 9.81])
+    measured = float(np.sqrt(np.mean(np.sum((f - f0) ** 2, axis=1))))
+    assert measured < 1.0, measured
+    assert 1.0 / 3.0 < rep.predicted_accel_rms_m_s2 / measured < 3.0, (rep.predicted_accel_rms_m_s2, measured)
+    (w,) = [w for w in rep.warnings if w.code == "poses_interpolated"]
+    assert "600 of 1201 poses" in w.message and "from 10 Hz to 20 Hz" in w.message, w.message
+
+
+def test_given_settings_fit_every_pose():
+    """Only the automatic choice leaves interpolated poses out; given settings fit what is given."""
+    _, (t, p, q) = _resampled(2, duration_s=20.0)
+    _, rep = fit(t, p, q, order=6, knot_spacing_s=0.1, return_report=True)
+    assert "poses_interpolated" not in [w.code for w in rep.warnings]
