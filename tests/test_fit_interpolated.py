@@ -58,6 +58,21 @@ def test_interpolated_poses_are_found(m):
     assert np.array_equal(found[1][1:-1], (idx % m != 0)[1:-1])
 
 
+def test_long_resampled_input_is_judged_in_its_middle_and_confirmed_throughout():
+    """30 000 poses (beyond the 24 000 judged): found; one pose missing near the start shifts
+    the phase of the poses carrying the data there, which the check of the whole input sees."""
+    rng = np.random.default_rng(3)
+    n = 30_001
+    t = np.arange(n) / 200.0
+    X = [np.cumsum(1e-3 * rng.normal(size=(n, 3)), axis=0) for _ in range(2)]
+    for Y in X:  # every other pose halfway between its neighbours
+        Y[1:-1:2] = 0.5 * (Y[:-2:2] + Y[2::2])
+    found = interpolated_poses(t, *X)
+    assert found is not None and found[0] == 2 and np.count_nonzero(found[1]) == (n - 1) // 2
+    keep = np.r_[0:1001, 1002:n]  # one pose missing: before it the data poses are the even ones, after it the odd
+    assert interpolated_poses(np.arange(keep.size) / 200.0, *(Y[keep] for Y in X)) is None
+
+
 @pytest.mark.parametrize("kind", ["exact", "white", "ar1"])
 def test_measured_poses_are_not_taken_for_interpolated(kind):
     """Motion and noise at every pose: sampled, not interpolated (the median squared second
