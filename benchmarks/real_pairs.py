@@ -75,6 +75,20 @@ def load_euroc(gt_name: str, label: str) -> Pair:
     return Pair(label, t, g[:, 0:3], g[:, [4, 5, 6, 3]], ti, m[:, 0:3], m[:, 3:6])
 
 
+def resampled(pair: Pair, label: str, m: int = 2) -> Pair:
+    """The pair's poses taken every m-th and resampled back to their stamps (positions linearly,
+    rotations along the geodesic), as ground truth exported at a lower rate and written at a
+    higher one is (mocap at 100 Hz written at 200 Hz)."""
+    from scipy.spatial.transform import Rotation, Slerp
+
+    n = (pair.t_s.size - 1) // m * m + 1
+    t, tc = pair.t_s[:n], pair.t_s[:n:m]
+    p = np.column_stack([np.interp(t, tc, pair.positions[:n:m, j]) for j in range(3)])
+    q = Slerp(tc, Rotation.from_quat(pair.quat_xyzw[:n:m]))(t).as_quat()
+    return Pair(label, t, p, q, pair.imu_t_s, pair.gyro, pair.accel,
+                pair.notes + [f"poses every {m}th, resampled back (linear / geodesic)"])
+
+
 PAIRS = {
     "broad07": lambda: load_broad("07"),
     "broad09": lambda: load_broad("09"),
@@ -85,6 +99,11 @@ PAIRS = {
        ("02", "03", "05", "10", "11", "12", "14", "15", "18", "30", "31", "32", "33", "34", "35", "36")},
     "euroc200": lambda: load_euroc("groundtruth.csv", "EuRoC V1_02 200 Hz"),
     "euroc20": lambda: load_euroc("groundtruth_vicon2gt_20hz.csv", "EuRoC V1_02 20 Hz vicon2gt"),
+    # resampled ground truth: the 200 Hz one at 100 Hz written at 200 Hz, the 20 Hz one at 10 Hz
+    # written at 20 Hz
+    "euroc200r": lambda: resampled(load_euroc("groundtruth.csv", ""), "EuRoC V1_02 100 Hz resampled to 200 Hz"),
+    "euroc20r": lambda: resampled(load_euroc("groundtruth_vicon2gt_20hz.csv", ""),
+                                  "EuRoC V1_02 10 Hz vicon2gt resampled to 20 Hz"),
 }
 
 
