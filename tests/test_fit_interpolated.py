@@ -123,6 +123,19 @@ def test_interpolated_poses_are_fitted_as_the_poses_they_came_from():
     assert "600 of 1201 poses" in w.message and "from 10 Hz to 20 Hz" in w.message, w.message
 
 
+def test_resampled_poses_far_finer_than_the_knots_are_fitted_as_given():
+    """100 Hz poses written at 200 Hz: the knots chosen through all of them (tens of ms) are far
+    coarser than the 100 Hz spacing, where the held-out fits cannot bend at the poses carrying the
+    data; the choice stands and nothing is told (the 100 Hz poses alone would read some scenes'
+    noise as coloured)."""
+    _, (t, p, q) = _resampled(2, rate_hz=100.0, duration_s=20.0)
+    found = interpolated_poses(t, p - p[0], _theta(q))
+    assert found is not None and found[0] == 2
+    _, rep = fit(t, p, q, return_report=True)
+    assert min(rep.knot_spacing_s, rep.position_knot_spacing_s) >= 0.03, rep.summary()
+    assert "poses_interpolated" not in [w.code for w in rep.warnings]
+
+
 def test_given_settings_fit_every_pose():
     """Only the automatic choice leaves interpolated poses out; given settings fit what is given."""
     _, (t, p, q) = _resampled(2, duration_s=20.0)

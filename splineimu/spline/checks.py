@@ -272,6 +272,7 @@ def interpolated_poses(t, P, theta):
     uniform = np.abs(dt - h) <= 0.01 * h
     ok = np.zeros(n, dtype=bool)
     ok[1:-1] = uniform[:-1] & uniform[1:]
+
     def second(Y):  # squared second differences (0 at the ends)
         e = np.zeros(Y.shape[0])
         e[1:-1] = np.sum((Y[2:] - 2.0 * Y[1:-1] + Y[:-2]) ** 2, axis=1)
