@@ -288,8 +288,10 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
         _rotation_bias(choice, probs[0], Rc, max_iter)
     pred_g = choice["predicted_gyro_rms_rad_s"] if choice else None
     pred_a = choice["predicted_accel_rms_m_s2"] if choice else None
-    warnings = (prediction_warnings(choice, t) + flip_warnings + gap_warnings + warnings + input_warnings(
-        t, P, theta, res_pos, res_rot, keep, choice, {"rotation": lay_r[1], "position": lay_p[1]}))
+    on = chosen_on  # (resampled poses: their rate and top octave are those of the poses carrying the data)
+    spacings = {"rotation": lay_r[1], "position": lay_p[1]}
+    warnings = (prediction_warnings(choice, t) + flip_warnings + gap_warnings + warnings
+                + input_warnings(t[on], P[on], theta[on], res_pos[on], res_rot[on], keep[on], choice, spacings))
     if p_order < 3:  # the CLI refuses it; here a spline for poses alone may be what is wanted
         warnings.append(FitWarning("order_too_low", f"position order {p_order} is piecewise linear: no acceleration "
                                    "between knots, so the accelerometer reads gravity alone; use order 3 or more"))
