@@ -158,8 +158,12 @@ def test_resampled_poses_far_finer_than_the_knots_are_fitted_as_given():
     assert "poses_interpolated" not in [w.code for w in rep.warnings]
 
 
-def test_given_settings_fit_every_pose():
-    """Only the automatic choice leaves interpolated poses out; given settings fit what is given."""
+@pytest.mark.parametrize("settings", [dict(order=6, knot_spacing_s=0.1), dict(knot_spacing_s=0.08)])
+def test_given_spacings_fit_every_pose(settings):
+    """Only automatic knot spacings leave interpolated poses out; given ones fit what is given
+    (with the order alone given, the spacings are chosen and the poses left out)."""
     _, (t, p, q) = _resampled(2, duration_s=20.0)
-    _, rep = fit(t, p, q, order=6, knot_spacing_s=0.1, return_report=True)
+    _, rep = fit(t, p, q, return_report=True, **settings)
     assert "poses_interpolated" not in [w.code for w in rep.warnings]
+    _, rep = fit(t, p, q, order=5, return_report=True)
+    assert "poses_interpolated" in [w.code for w in rep.warnings]

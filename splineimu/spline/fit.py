@@ -85,7 +85,9 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
     knot_spacing_s : float or "auto"
         Knot spacing [s] of the rotation (and, unless ``position_knot_spacing_s`` is given, of
         the position); ``"auto"`` chooses it from the data (:mod:`splineimu.spline.knots`),
-        for rotation and position independently.
+        for rotation and position independently. Poses resampled by interpolation (every m-th
+        carrying the data) are then chosen and fitted without the interpolated ones where the
+        spacings come within :data:`RESAMPLED_SPACINGS` of the data's (warning ``poses_interpolated``).
     position_order, position_knot_spacing_s : int / float / "auto", optional
         The position grid's own settings (``kind="split"`` only).
     weights : (N,) array_like, optional
@@ -211,7 +213,8 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
     if resampled is not None:
         m, between = resampled
         h = float(np.median(np.diff(t)))
-        if min(lay_r[1], lay_p[1]) < RESAMPLED_SPACINGS * m * h:
+        auto = [lay[1] for lay, dt in ((lay_r, given[1]), (lay_p, given[3])) if dt == "auto"]
+        if auto and min(auto) < RESAMPLED_SPACINGS * m * h:  # (a given spacing is fitted as given)
             # knots that close to the poses the others were interpolated from bend at them: the
             # held-out fits took the interpolation for motion. Chosen and fitted without those
             w = np.where(between, 0.0, w)
