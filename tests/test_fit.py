@@ -308,16 +308,21 @@ def test_se3_predicted_error_is_at_the_grid_it_fits():
     assert 1 / 3 < rot["end_predicted_rms"] / ends < 3, (rot["end_predicted_rms"], ends)
 
 
-def test_poses_logged_twice_are_refused_by_the_automatic_choice():
+def test_poses_logged_twice_are_dropped_or_refused_by_the_automatic_choice():
     """Each pose logged twice, 1 us apart: the automatic choice took the median interval (1 us) for
     the pose spacing and fitted splines of millions of segments (100 Hz, 10 s: stopped after 14
-    minutes at 6 GB). Now an InputError names the clusters; given settings still fit."""
+    minutes at 6 GB). The repeats are dropped as held poses (the fit is that of each pose once);
+    without outlier rejection an InputError names the clusters; given settings still fit."""
     t, p, q = ellipse_poses(100, duration=2.0)
     t2 = np.sort(np.r_[t, t + 1e-6])
     p2, q2 = np.repeat(p, 2, axis=0), np.repeat(q, 2, axis=0)
+    spl, rep = fit(t2, p2, q2, return_report=True)
+    assert "poses_held" in [w.code for w in rep.warnings] and len(rep.dropped_poses) == t.size
+    te = np.linspace(0.1, 1.9, 50)
+    np.testing.assert_allclose(spl.imu(te)[0], fit(t, p, q).imu(te)[0], rtol=0, atol=1e-12)
     for kw in ({"knot_spacing_s": 0.05}, {}, {"order": 4}):  # the first one returned (fast) without the check
         with pytest.raises(InputError, match=r"stamps come in clusters: half the intervals are under 0\.001 ms"):
-            fit(t2, p2, q2, **kw)
+            fit(t2, p2, q2, reject_outliers=False, **kw)
     spl = fit(t2, p2, q2, order=4, knot_spacing_s=0.05)
     np.testing.assert_allclose(spl.pose(t)[0], p, rtol=0, atol=1e-4)  # measured 3e-6
     # irregular stamps (intervals 0.2-1.8x) are no clusters

@@ -236,6 +236,43 @@ def stamp_warnings(t, P, theta):
         "times", a, b)]
 
 
+#: Poses that repeat their predecessor exactly (a later stamp, the same pose) in short runs within
+#: motion count as held (a trajectory sampled and held at a lower rate, logged at a higher one)
+#: when they are at least this share of the steps taken (:func:`held_poses`).
+HELD_SHARE = 0.1
+#: Longest run of repeats that counts as held (a rate 5x the poses'); longer ones are rests.
+_HELD_RUN = 4
+
+
+def held_poses(P, q):
+    """Poses to drop as held (bool (N,)): those equal to the one before (position and
+    quaternion, exactly) in runs of at most :data:`_HELD_RUN` between steps that move, where they
+    are at least :data:`HELD_SHARE` of those steps and repeats; else None.
+
+    A logger that writes the latest pose at a higher rate than the poses come (mocap at 100 Hz
+    written at 200 Hz, 120 Hz at 200 Hz) repeats a pose at later stamps: the stamps of the
+    repeats are not its time, and the staircase they make is read as motion (EuRoC V1_02's
+    ground truth held at 100 Hz and written at 200 Hz: gyro below 10 Hz 3.2x the best fixed
+    setting against its real IMU, nothing told). The first of each run keeps its stamp (the
+    closest to when the pose was taken). Rests are not held poses: longer runs of one pose are
+    kept (a still sensor given exactly keeps all of its poses), and so are a few short ones
+    (real ground truth: no repeat in EuRoC, TUM-VI, OpenVINS' files and 21 BROAD trials; 9 of
+    20 956 poses in TUM RGB-D fr2/desk)."""
+    same = np.all(P[1:] == P[:-1], axis=1) & np.all(q[1:] == q[:-1], axis=1)
+    if np.count_nonzero(same) < 8:
+        return None
+    edges = np.flatnonzero(np.diff(np.r_[0, same.astype(np.int8), 0]))
+    starts, stops = edges[::2], edges[1::2]
+    held = np.zeros(P.shape[0], dtype=bool)
+    for a, b in zip(starts, stops):
+        if b - a <= _HELD_RUN:
+            held[a + 1:b + 1] = True  # the poses after the first of the run
+    k = int(np.count_nonzero(held))
+    if k < 8 or k < HELD_SHARE * (np.count_nonzero(~same) + k):
+        return None
+    return held
+
+
 #: Poses count as resampled by interpolation when, for one phase modulo m of the uniformly spaced
 #: poses, the squared second differences of the others (their upper quartile) are below this
 #: share of that phase's (its lower quartile), for position and rotation alike

@@ -36,6 +36,7 @@ from .checks import (
     check_stamp_clusters,
     classify_residuals,
     dropped_warning,
+    held_poses,
     input_warnings,
     interpolated_poses,
     resolve_setting,
@@ -104,7 +105,8 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
         After the first fit, drop runs of poses that jump away from the motion and back
         (tracking glitches, :mod:`splineimu.spline.checks`) and fit again, the automatic
         knot choice made again without them; the report lists them (``dropped_poses``) and
-        warns.
+        warns. Before the fit, orientation flips and held poses (a pose repeated exactly at
+        later stamps while the input moves, :func:`.checks.held_poses`) are dropped alike.
     progress : bool
         Show a progress bar for long fits.
     return_report : bool
@@ -154,9 +156,18 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
             raise SplineImuError(f"knot spacing {dt:g} s is too fine: {(t[-1] - t[0]) / dt:.3g} segments for "
                                  f"{t.size} poses (at most 100 per pose)")
     q = _quat_wxyz(quat_xyzw)
-    # orientation flips (away and back by more than 90 degrees) are dropped before anything else
+    # orientation flips (away and back by more than 90 degrees) and held poses (repeated at later
+    # stamps) are dropped before anything else
     flips = rotation_flips(t, R) if reject_outliers else np.zeros(t.size, dtype=bool)
     t_in, flip_warnings = t, dropped_warning(t, flips, "an orientation flip")
+    held = held_poses(P, q) if reject_outliers else None
+    if held is not None:
+        k, i = int(np.count_nonzero(held)), np.flatnonzero(held)
+        flip_warnings.append(FitWarning(
+            "poses_held", f"{k} of {t.size} poses repeat the pose before them exactly at a later stamp while the "
+            "input moves (held by a logger that writes the latest pose faster than poses come, or logged twice): "
+            "dropped, each pose kept at its first stamp", float(t[i[0]]), float(t[i[-1]])))
+        flips = flips | held
     if flips.any():
         t, P, R, q, w = (a[~flips] for a in (t, P, R, q, w))
     # fitted about the first position (exactly, nearby floats): georeferenced input (UTM, 5e6 m)
