@@ -12,7 +12,10 @@ real IMU's.
 
     PYTHONPATH=$PWD python benchmarks/real_pairs.py [names...]   # writes results/real_pairs.md
 
-Held-out BROAD trials (broad02 ... broad36) are read from the folders in $BROAD_DATA.
+Held-out BROAD trials (broad02 ... broad36) are read from the folders in $BROAD_DATA. The
+resampled (euroc200r, euroc20r) and held (euroc200h, euroc20h) pairs take EuRoC's ground truth
+every other pose and resample it back to its stamps or repeat each pose at the next one (a held
+pair is aligned with the original: scipy through the staircase lags by half a pose spacing).
 
 Data: ../shared/data (BROAD: Laidig et al., Data 6(7):72, 2021, CC BY 4.0; EuRoC: ETH ASL).
 """
@@ -42,6 +45,9 @@ class Pair:
     gyro: np.ndarray
     accel: np.ndarray
     notes: list = field(default_factory=list)
+    #: the pair the time offset and sensor rotation are found with, if not this one (poses
+    #: held at later stamps: scipy through the staircase lags by half a pose spacing)
+    aligned_by: Pair | None = None
 
 
 def load_broad(trial: str) -> Pair:
@@ -89,6 +95,15 @@ def resampled(pair: Pair, label: str, m: int = 2) -> Pair:
                 pair.notes + [f"poses every {m}th, resampled back (linear / geodesic)"])
 
 
+def held(pair: Pair, label: str, m: int = 2) -> Pair:
+    """The pair's poses taken every m-th and held (repeated) at the stamps between, as a logger
+    writing the latest pose at m times the rate the poses come does; aligned with the pair."""
+    n = (pair.t_s.size - 1) // m * m + 1
+    i = np.arange(n) // m * m
+    return Pair(label, pair.t_s[:n], pair.positions[i], pair.quat_xyzw[i], pair.imu_t_s, pair.gyro, pair.accel,
+                pair.notes + [f"poses every {m}th, held {m}x"], aligned_by=pair)
+
+
 PAIRS = {
     "broad07": lambda: load_broad("07"),
     "broad09": lambda: load_broad("09"),
@@ -104,6 +119,10 @@ PAIRS = {
     "euroc200r": lambda: resampled(load_euroc("groundtruth.csv", ""), "EuRoC V1_02 100 Hz resampled to 200 Hz"),
     "euroc20r": lambda: resampled(load_euroc("groundtruth_vicon2gt_20hz.csv", ""),
                                   "EuRoC V1_02 10 Hz vicon2gt resampled to 20 Hz"),
+    # held ground truth: the same, each pose repeated at the stamp after it
+    "euroc200h": lambda: held(load_euroc("groundtruth.csv", ""), "EuRoC V1_02 100 Hz held at 200 Hz"),
+    "euroc20h": lambda: held(load_euroc("groundtruth_vicon2gt_20hz.csv", ""),
+                             "EuRoC V1_02 10 Hz vicon2gt held at 20 Hz"),
 }
 
 
@@ -217,7 +236,8 @@ def evaluate(pair: Pair, fixed=True, verbose=False):
     from splineimu import fit
 
     ref = scipy_motion(pair.t_s, pair.positions, pair.quat_xyzw)
-    al = align(pair, ref)
+    by = pair.aligned_by or pair
+    al = align(by, scipy_motion(by.t_s, by.positions, by.quat_xyzw))
     rows = {"scipy": figures(pair, al, ref)}
     c0 = time.process_time()
     spl, rep = fit(pair.t_s, pair.positions, pair.quat_xyzw, return_report=True)
