@@ -103,8 +103,10 @@ CLUSTER_RATIO = 0.05
 def check_stamp_clusters(t):
     """Refuse stamps in clusters for the automatic knot choice, which takes the median interval for
     the pose spacing and tries knots from 0.7 times it: poses logged twice 1 us apart (100 Hz, 10 s)
-    had it fit million-segment splines, 14 minutes and 6 GB before it was stopped. Gaps and
-    irregular sampling leave the median near the 90th percentile (random 0.2-1.8x: 0.6 of it)."""
+    had it fit million-segment splines, 14 minutes and 6 GB before it was stopped (the same pose
+    twice is dropped as held before this, :func:`held_poses`; different poses in bursts are not).
+    Gaps and irregular sampling leave the median near the 90th percentile (random 0.2-1.8x: 0.6
+    of it)."""
     dt = np.diff(t)
     if dt.size < 10:
         return
