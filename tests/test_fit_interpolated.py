@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from fit_scenes import HAND_SINES, noise, sine_positions
+from scipy.spatial.transform import Rotation, Slerp
 
 from splineimu import fit, lie
 from splineimu._kernels import gauss_newton as _gn
@@ -33,19 +34,23 @@ def _rotation(t):
     return lie.so3_exp(0.5 * sine_positions(t, FAST_SINES))
 
 
+def _interpolate(t, tc, pc, qc):
+    """Poses (pc, quaternions qc) at ``tc`` resampled at ``t``: positions linearly, rotations
+    along the geodesic (scipy's Slerp), as a trajectory exported at one rate and written at
+    another is."""
+    p = np.column_stack([np.interp(t, tc, pc[:, j]) for j in range(3)])
+    return p, Slerp(tc, Rotation.from_quat(qc))(t).as_quat()
+
+
 def _resampled(m, rate_hz=10.0, duration_s=60.0, seed=1):
-    """Noisy poses (1 mm / 0.1 deg) at ``rate_hz``, resampled m times as fast: positions
-    linearly, rotations along the geodesic. Returns (coarse t, p, R) and (t, p, quat)."""
+    """Noisy poses (1 mm / 0.1 deg) at ``rate_hz``, resampled m times as fast. Returns (coarse
+    t, p, R) and (t, p, quat)."""
     rng = np.random.default_rng(seed)
     tc = np.arange(0.0, duration_s + 1e-9, 1.0 / rate_hz)
     pc = sine_positions(tc, FAST_SINES) + 1e-3 * rng.normal(size=(tc.size, 3))
     Rc = _rotation(tc) @ lie.so3_exp(np.radians(0.1) * rng.normal(size=(tc.size, 3)))
     t = np.arange((tc.size - 1) * m + 1) / (m * rate_hz)
-    p = np.column_stack([np.interp(t, tc, pc[:, j]) for j in range(3)])
-    i = np.minimum(np.arange(t.size) // m, tc.size - 2)
-    u = (t - tc[i]) * rate_hz
-    R = Rc[i] @ lie.so3_exp(u[:, None] * lie.so3_log(np.swapaxes(Rc[i], 1, 2) @ Rc[i + 1]))
-    return (tc, pc, Rc), (t, p, lie.matrix_to_quat_xyzw(R))
+    return (tc, pc, Rc), (t, *_interpolate(t, tc, pc, lie.matrix_to_quat_xyzw(Rc)))
 
 
 @pytest.mark.parametrize("m", [2, 3, 4])
@@ -128,17 +133,13 @@ def test_resampled_real_ground_truth_is_told_at_its_own_rate():
     export written at 20 Hz): found, and its top octave judged at 10 Hz (5 Hz Nyquist), not at
     the 20 Hz of the file. Against the real IMU this pair's accel below 10 Hz went from 1.33x to
     0.97x the best fixed setting (benchmarks/real_pairs.py euroc20r)."""
-    from scipy.spatial.transform import Rotation, Slerp
-
     path = DATA / "euroc_V1_02_medium" / "groundtruth_vicon2gt_20hz.csv"
     if not path.exists():
         pytest.skip("EuRoC V1_02 vicon2gt not in ../shared/data")
     tr = read_euroc_groundtruth(path)
     n = (tr.t_ns.size - 1) // 2 * 2 + 1
     t = (tr.t_ns[:n] - tr.t_ns[0]) * 1e-9
-    p = np.column_stack([np.interp(t, t[::2], tr.positions[:n:2, j]) for j in range(3)])
-    q = Slerp(t[::2], Rotation.from_quat(tr.quat_xyzw[:n:2]))(t).as_quat()
-    _, rep = fit(t, p, q, return_report=True)
+    _, rep = fit(t, *_interpolate(t, t[::2], tr.positions[:n:2], tr.quat_xyzw[:n:2]), return_report=True)
     codes = [w.code for w in rep.warnings]
     assert "poses_interpolated" in codes, codes
     (low,) = [w.message for w in rep.warnings if w.code == "input_rate_low"]

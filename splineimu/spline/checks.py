@@ -263,10 +263,8 @@ def held_poses(P, q):
     same = np.all(P[1:] == P[:-1], axis=1) & np.all(q[1:] == q[:-1], axis=1)
     if np.count_nonzero(same) < 8:
         return None
-    edges = np.flatnonzero(np.diff(np.r_[0, same.astype(np.int8), 0]))
-    starts, stops = edges[::2], edges[1::2]
     held = np.zeros(P.shape[0], dtype=bool)
-    for a, b in zip(starts, stops):
+    for a, b in _runs(same, bridge=0):
         if b - a <= _HELD_RUN:
             held[a + 1:b + 1] = True  # the poses after the first of the run
     k = int(np.count_nonzero(held))
@@ -341,8 +339,9 @@ def interpolated_poses(t, P, theta):
                 between = ok & (np.arange(n) % m != phases.pop())
                 # (on all of it, 99% of the poses between must hold: a stretch of another phase
                 # is a few percent of them, and a glitch at a data pose leaves them on the line)
+                full = [e for e, _ in judged] if n <= _JUDGED_POSES else [second(Y) for Y in (P, theta)]
                 if all(np.percentile(e[between], 99) <= INTERPOLATED_SHARE * quartiles(e, ok & ~between)[0]
-                       for e in (second(P), second(theta))):
+                       for e in full):
                     return m, between
             return None
     return None

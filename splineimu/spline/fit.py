@@ -159,24 +159,24 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
     # orientation flips (away and back by more than 90 degrees) and held poses (repeated at later
     # stamps) are dropped before anything else
     flips = rotation_flips(t, R) if reject_outliers else np.zeros(t.size, dtype=bool)
-    t_in, flip_warnings = t, dropped_warning(t, flips, "an orientation flip")
+    t_in, early_warnings = t, dropped_warning(t, flips, "an orientation flip")
     held = held_poses(P, q) if reject_outliers else None
     if held is not None:
         k, i = int(np.count_nonzero(held)), np.flatnonzero(held)
-        flip_warnings.append(FitWarning(
+        early_warnings.append(FitWarning(
             "poses_held", f"{k} of {t.size} poses repeat the pose before them exactly at a later stamp while the "
             "input moves (held by a logger that writes the latest pose faster than poses come, or logged twice): "
             "dropped, each pose kept at its first stamp", float(t[i[0]]), float(t[i[-1]])))
-        flips = flips | held
-    if flips.any():
-        t, P, R, q, w = (a[~flips] for a in (t, P, R, q, w))
+    early = flips if held is None else flips | held  # the poses dropped before the fit
+    if early.any():
+        t, P, R, q, w = (a[~early] for a in (t, P, R, q, w))
     # fitted about the first position (exactly, nearby floats): georeferenced input (UTM, 5e6 m)
     # rounds at 1e-9 m, where the SE3 steps stop (it took 60-90 iterations instead of 5)
     offset = P[0].copy()
     P = P - offset
     if np.count_nonzero(w) < 3:  # fewer leave the position's quadratic (the penalty's null space) free
         raise InputError(f"too few poses to fit: got {np.count_nonzero(w)} with a positive weight, need at least 3")
-    gap_warnings = check_rotation_steps(t, R, np.flatnonzero(~flips))
+    gap_warnings = check_rotation_steps(t, R, np.flatnonzero(~early))
     given = (r_order, r_dt, p_order, p_dt)
     theta = np.zeros((t.size, 3))  # accumulated body-frame increments (signals.rotation_signal)
     _gn.quat_increments(q, theta[1:])
@@ -304,7 +304,7 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
     pred_a = choice["predicted_accel_rms_m_s2"] if choice else None
     on = chosen_on  # (resampled poses: their rate and top octave are those of the poses carrying the data)
     spacings = {"rotation": lay_r[1], "position": lay_p[1]}
-    warnings = (prediction_warnings(choice, t) + flip_warnings + gap_warnings + warnings
+    warnings = (prediction_warnings(choice, t) + early_warnings + gap_warnings + warnings
                 + input_warnings(t[on], P[on], theta[on], res_pos[on], res_rot[on], keep[on], choice, spacings))
     if p_order < 3:  # the CLI refuses it; here a spline for poses alone may be what is wanted
         warnings.append(FitWarning("order_too_low", f"position order {p_order} is piecewise linear: no acceleration "
@@ -323,7 +323,7 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
         iterations=iters, converged=bool(conv), time_s=time.perf_counter() - t0_wall,
         smoothness=float(smoothness), position_order=p_order, position_knot_spacing_s=lay_p[1],
         n_position_control=lay_p[3], predicted_gyro_rms_rad_s=pred_g, predicted_accel_rms_m_s2=pred_a,
-        dropped_poses=sorted(np.flatnonzero(flips).tolist() + np.flatnonzero(~flips)[dropped].tolist()),
+        dropped_poses=sorted(np.flatnonzero(early).tolist() + np.flatnonzero(~early)[dropped].tolist()),
         knot_choice=choice,
         sparse_control_points=probs[0].n_sparse, warnings=warnings, origin_ns=int(origin_ns),
     )
