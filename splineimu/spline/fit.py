@@ -48,9 +48,9 @@ from .checks import (
 from .controls import _quat_wxyz
 from .core import KINDS, Spline
 from .crossval import MAX_CV_POSES, _windows
-from .knots import _LADDER, choose_knot_spacing, prediction_warnings
+from .knots import _LADDER, choose_knot_spacing
 from .problem import _Problem
-from .report import FitReport, FitWarning
+from .report import FitReport, FitWarning, prediction_warnings
 from .signals import MAX_CONTROL_TURN_RAD, anchor_block, max_rotation_spacing, rotation_increments
 from .surrogate import prediction_at_spacing
 

@@ -135,7 +135,6 @@ import numpy as np
 from .._kernels import cv as _kcv
 from ..errors import SplineImuError
 from .crossval import _STEP, _correlation_lag, _search, _windows
-from .report import WARN_ACCEL_M_S2, WARN_GYRO_RAD_S, FitWarning
 from .signals import MAX_CONTROL_TURN_RAD, anchor_block, max_rotation_spacing, rotation_increments
 from .surrogate import motion_limited, noise_surrogates, noise_under_motion, rounding_only
 from .zones import end_bias2, find_gaps, gap_predictions
@@ -551,50 +550,3 @@ def choose_knot_spacing(t, P, R, w=None, rotation_order="auto", position_order="
         "angle_noise_rad": rot["cv_rms"] / np.sqrt(3.0),
         "method": "blocked cross-validation on held-out poses (rotation and position separately)",
     }
-
-
-def prediction_warnings(choice, t):
-    """Warnings about large predicted errors, ends less accurate than the interior and gaps whose
-    IMU is a guess."""
-    if choice is None:
-        return []
-    out = []
-    h = float(np.median(np.diff(t))) if len(t) > 1 else 0.0
-    g, a = choice["predicted_gyro_rms_rad_s"], choice["predicted_accel_rms_m_s2"]
-    if g > WARN_GYRO_RAD_S or a > WARN_ACCEL_M_S2:
-        out.append(FitWarning("predicted_error_high", f"predicted error of the synthesized IMU is gyro ~{g:.3g} rad/s, "
-                              f"accel ~{a:.3g} m/s^2 (above {WARN_GYRO_RAD_S:g} rad/s or {WARN_ACCEL_M_S2:g} m/s^2): "
-                              "the poses are too noisy or too sparse for the motion"))
-    for key, name, unit, lim in (("rotation", "gyro", "rad/s", WARN_GYRO_RAD_S),
-                                 ("position", "accel", "m/s^2", WARN_ACCEL_M_S2)):
-        c = choice[key]
-        if c.get("predicted_rms_if_noise", 0.0) > 3.0 * c["predicted_rms"]:
-            dt = 1e3 * c["knot_spacing_s"]
-            what, noise = ((f"the top octave of the {key} poses was taken for motion (knots {dt:.3g} ms follow it, ",
-                            "pose noise") if c["motion_limited"] else
-                           (f"the {key} knots ({dt:.3g} ms) are finer than the poses (every {1e3 * h:.3g} ms) and "
-                            "take their finest detail for motion (", "pose noise correlated over neighbouring poses "
-                            "(as in interpolated input)"))
-            out.append(FitWarning(
-                "prediction_assumes_motion", f"{what}predicted {name} error ~{c['predicted_rms']:.3g} {unit}); if it "
-                f"is {noise}, the {name} error is up to ~{c['predicted_rms_if_noise']:.3g} {unit} (a coarser knot "
-                "spacing smooths it)"))
-        if c["end_predicted_rms"] > max(3.0 * c["predicted_rms"], lim):
-            z = c["end_zone_s"]
-            out.append(FitWarning("ends_less_accurate", f"the first and last {z:.3f} s are less accurate ({name} "
-                                  f"~{c['end_predicted_rms']:.3g} {unit} against ~{c['predicted_rms']:.3g} inside): "
-                                  f"trim {z:.3f} s from each end", float(t[0]), float(t[-1])))
-    # gaps: one warning per gap whose IMU error (either quantity) is far above the rest's
-    told = {}
-    for key, name, unit, lim in (("rotation", "gyro", "rad/s", WARN_GYRO_RAD_S),
-                                 ("position", "accel", "m/s^2", WARN_ACCEL_M_S2)):
-        c = choice[key]
-        for gp in c.get("gaps", []):
-            if gp["predicted_rms"] > max(3.0 * c["predicted_rms"], lim):
-                told.setdefault((gp["t_start_s"], gp["t_end_s"]), []).append(
-                    f"{name} ~{gp['predicted_rms']:.3g} {unit} against ~{c['predicted_rms']:.3g} elsewhere")
-    for (a, b), what in sorted(told.items()):
-        out.append(FitWarning("gap_bridged", f"no poses from {a:.3f} s to {b:.3f} s ({b - a:.3f} s): the IMU there is "
-                              f"the fit's guess ({', '.join(what)}, measured by opening gaps that long where there "
-                              "are poses)", a, b))
-    return out
