@@ -12,7 +12,8 @@ real IMU's.
 
     PYTHONPATH=$PWD python benchmarks/real_pairs.py [names...]   # writes results/real_pairs.md
 
-Held-out BROAD trials (broad02 ... broad36) are read from the folders in $BROAD_DATA. The
+Held-out BROAD trials (broad02 ... broad36) are read from the folders in $BROAD_DATA; EuRoC
+MH_01 (``mh01``) from the two files named in $EUROC_MH01 (ground truth as TUM text, IMU csv). The
 resampled (euroc200r, euroc20r) and held (euroc200h, euroc20h) pairs take EuRoC's ground truth
 every other pose and resample it back to its stamps or repeat each pose at the next one (a held
 pair is aligned with the original: scipy through the staircase lags by half a pose spacing).
@@ -81,6 +82,18 @@ def load_euroc(gt_name: str, label: str) -> Pair:
     return Pair(label, t, g[:, 0:3], g[:, [4, 5, 6, 3]], ti, m[:, 0:3], m[:, 3:6])
 
 
+def load_euroc_tum(gt_tum: str, imu_csv: str, label: str) -> Pair:
+    """A EuRoC flight from its ground truth as TUM text (OpenVINS' ov_data/euroc_mav) and its IMU
+    csv (stamps in ns, also written as floats such as 1.40363657975856E+018: rounded to 10 us)."""
+    g = np.loadtxt(gt_tum, comments="#")
+    rows = [line.split(",") for line in open(imu_csv) if line[:1].isdigit()]
+    m = np.array([[float(x) for x in r] for r in rows if len(r) == 7 and r[1].strip()])
+    t_imu = np.round(m[:, 0] / 1e4).astype(np.int64) * 10000
+    t_gt = np.round(g[:, 0] * 1e5).astype(np.int64) * 10000
+    origin = int(t_gt[0])
+    return Pair(label, (t_gt - origin) / 1e9, g[:, 1:4], g[:, 4:8], (t_imu - origin) / 1e9, m[:, 1:4], m[:, 4:7])
+
+
 def resampled(pair: Pair, label: str, m: int = 2) -> Pair:
     """The pair's poses taken every m-th and resampled back to their stamps (positions linearly,
     rotations along the geodesic), as ground truth exported at a lower rate and written at a
@@ -114,6 +127,8 @@ PAIRS = {
        ("02", "03", "05", "10", "11", "12", "14", "15", "18", "30", "31", "32", "33", "34", "35", "36")},
     "euroc200": lambda: load_euroc("groundtruth.csv", "EuRoC V1_02 200 Hz"),
     "euroc20": lambda: load_euroc("groundtruth_vicon2gt_20hz.csv", "EuRoC V1_02 20 Hz vicon2gt"),
+    # held out, not in ../shared/data: $EUROC_MH01 = "<MH_01_easy.txt>,<imu0 data.csv>"
+    "mh01": lambda: load_euroc_tum(*os.environ["EUROC_MH01"].split(","), "EuRoC MH_01 200 Hz"),
     # resampled ground truth: the 200 Hz one at 100 Hz written at 200 Hz, the 20 Hz one at 10 Hz
     # written at 20 Hz
     "euroc200r": lambda: resampled(load_euroc("groundtruth.csv", ""), "EuRoC V1_02 100 Hz resampled to 200 Hz"),
