@@ -138,6 +138,25 @@ def test_integer_seconds_and_decimal_stamps_are_read(tmp_path):
     assert read_tum(p).t_ns[1] == 5_000_000 * 10**9  # a decimal point says seconds: read as written
 
 
+def test_decimal_milliseconds_counted_from_zero_get_a_notice(tmp_path):
+    """A 3 s recording at 200 Hz stamped in milliseconds from 0 ("0.000 5.000 ..."): read as seconds
+    (a decimal point says so), it spans 50 minutes and from-tum synthesized IMU over all of it
+    with nothing said; now the reader's notice says what the stamps are in milliseconds."""
+    t_ns, pos, quat = _poses(600)
+    p = tmp_path / "p.tum"
+    p.write_text(_tum_text([f"{t / 1e6:.3f}" for t in t_ns.tolist()], pos, quat))
+    tr = read_tum(p)
+    assert tr.t_ns[1] == 5 * 10**9  # read as written
+    assert tr.notices == ["stamps counted from 0 step by 5 s (0.2 Hz; the poses span 49.9 min): if they are "
+                          "milliseconds, the poses are 200 Hz over 3 s; TUM stamps are decimal seconds: divide the "
+                          "column by 1000"]
+    # seconds from 0 at 200 Hz, and the same 5 s steps since 1970 (sparse poses with an epoch): nothing
+    p.write_text(_tum_text([f"{t / 1e9:.3f}" for t in t_ns.tolist()], pos, quat))
+    assert read_tum(p).notices == []
+    p.write_text(_tum_text([f"{1.7e9 + t / 1e6:.3f}" for t in t_ns.tolist()], pos, quat))
+    assert read_tum(p).notices == []
+
+
 # ------------------------------------------------------------------ KITTI
 
 

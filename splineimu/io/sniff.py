@@ -15,7 +15,9 @@ seems to be and what to use instead:
   microsecond (seconds or milliseconds written in a nanosecond column);
 - :func:`check_seconds_magnitude` refuses second stamps beyond the year 5000 (milli-, micro-
   or nanoseconds in a TUM file), :func:`check_integer_seconds_step` integer second stamps
-  that step by 1000 s or more (the same, counted from 0).
+  that step by 1000 s or more (the same, counted from 0);
+- :func:`relative_seconds_notice` words a notice for decimal stamps counted from 0 that step by a
+  second or more (milliseconds written as decimals read as seconds).
 
 Examples
 --------
@@ -37,7 +39,7 @@ import numpy as np
 from ..errors import InputError
 
 __all__ = ["guess_format", "format_hint", "add_format_hint", "check_tum_layout", "check_ns_spacing",
-           "check_seconds_magnitude", "check_integer_seconds_step", "FORMATS"]
+           "check_seconds_magnitude", "check_integer_seconds_step", "relative_seconds_notice", "FORMATS"]
 
 #: Format key -> (description, what to use).
 FORMATS = {
@@ -297,6 +299,47 @@ def check_integer_seconds_step(stamps_text, *, path=None, line=None, advice: str
         f"{step:g} s"
     raise InputError(f"integer stamps step by {step:.10g} (read as seconds, one pose every {every}): they look like "
                      f"{unit} ({rate:.3g} Hz)" + (f"; {advice}" if advice else ""), path=path, line=line)
+
+
+#: Stamps counted from 0 (the first below this, in s: no epoch) that step by a second or more over
+#: at least RELATIVE_POSES poses get a notice (:func:`relative_seconds_notice`).
+RELATIVE_START_S = 1e6
+RELATIVE_POSES = 100
+
+
+def _span(seconds: float) -> str:
+    return (f"{seconds / 86400:.3g} days" if seconds >= 86400 else f"{seconds / 3600:.3g} h" if seconds >= 3600
+            else f"{seconds / 60:.3g} min" if seconds >= 60 else f"{seconds:.3g} s")
+
+
+def relative_seconds_notice(t_ns) -> str | None:
+    """A notice for stamps that may be milliseconds written as decimals, or None.
+
+    Decimal stamps are read as seconds as written (a decimal point says seconds), but
+    ``0.000 5.000 10.000`` is also 200 Hz in milliseconds counted from 0: read as seconds, a 3 s
+    recording spans 50 minutes and from-tum synthesizes IMU samples over all of it, with
+    nothing else to tell. Said where the stamps are counted from 0 (the first below
+    :data:`RELATIVE_START_S`: no epoch), step by a second or more, over at least
+    :data:`RELATIVE_POSES` poses. A sparse trajectory counted from 0 gets it too; it only says
+    what the stamps would be in milliseconds.
+
+    Examples
+    --------
+    >>> relative_seconds_notice(np.arange(600) * 5 * 10**9)[:66]
+    'stamps counted from 0 step by 5 s (0.2 Hz; the poses span 49.9 min'
+    >>> relative_seconds_notice(1700000000 * 10**9 + np.arange(600) * 5 * 10**9) is None  # an epoch
+    True
+    """
+    t = np.asarray(t_ns, dtype=np.int64)
+    if t.size < RELATIVE_POSES or abs(int(t[0])) >= RELATIVE_START_S * 1e9:
+        return None
+    step = float(np.median(np.diff(t))) / 1e9
+    if step < 1.0:
+        return None
+    span = float(t[-1] - t[0]) / 1e9
+    return (f"stamps counted from 0 step by {step:g} s ({1.0 / step:.3g} Hz; the poses span {_span(span)}): if they "
+            f"are milliseconds, the poses are {1e3 / step:.3g} Hz over {_span(span / 1e3)}; TUM stamps are decimal "
+            "seconds: divide the column by 1000")
 
 
 def add_format_hint(exc: InputError, path, expected: str, use: str | None = None) -> InputError:

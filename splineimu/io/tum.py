@@ -80,7 +80,13 @@ def read_tum(path, min_poses: int = 2, repeated_stamps: str = "error") -> PoseTr
     ([1305031102175304000, 1305031102185304000], [2, 3])
     """
     from ..errors import InputError
-    from .sniff import add_format_hint, check_integer_seconds_step, check_seconds_magnitude, check_tum_layout
+    from .sniff import (
+        add_format_hint,
+        check_integer_seconds_step,
+        check_seconds_magnitude,
+        check_tum_layout,
+        relative_seconds_notice,
+    )
 
     has_header = check_tum_layout(path)  # EuRoC, KITTI, a header with qw first: refused before reading
     try:
@@ -88,10 +94,14 @@ def read_tum(path, min_poses: int = 2, repeated_stamps: str = "error") -> PoseTr
         convert = "TUM stamps are decimal seconds: convert the column"
         check_seconds_magnitude(table.stamps[0], path=path, line=int(table.line_numbers[0]), advice=convert)
         check_integer_seconds_step(table.stamps, path=path, line=int(table.line_numbers[0]), advice=convert)
-        return track_from_table(table, "s", table.values[:, 3:7], path=path, min_poses=min_poses,
-                                repeated_stamps=repeated_stamps)
+        track = track_from_table(table, "s", table.values[:, 3:7], path=path, min_poses=min_poses,
+                                 repeated_stamps=repeated_stamps)
     except InputError as exc:
         raise add_format_hint(exc, path, "tum") from None
+    note = relative_seconds_notice(track.t_ns)
+    if note is not None:
+        track.notices.append(note)
+    return track
 
 
 def _tum_table(t_ns, positions, quat_xyzw):
