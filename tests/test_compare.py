@@ -325,10 +325,15 @@ def test_few_associated_poses_are_noted(tmp_path, capsys):
     est.write_text("".join(f"{i * 5}.000 {i * 0.01 + 0.5} 0 0 0 0 0 1\n" for i in range(399)))  # ms, 0.5 m off
     r = compare_files(est, ref)
     assert r.n_associated == 1 and r.ape.stats["rmse"] == 0.5
-    assert r.notes == ["only 1 of 399 estimated and 399 reference poses were associated: the stamps span "
+    # the reader says what the estimate's stamps are in milliseconds; the association, how few it paired
+    assert r.notes == [f"{est}: stamps counted from 0 step by 5 s (0.2 Hz; the poses span 33.2 min): if they are "
+                       "milliseconds, the poses are 200 Hz over 1.99 s; TUM stamps are decimal seconds: divide the "
+                       "column by 1000",
+                       "only 1 of 399 estimated and 399 reference poses were associated: the stamps span "
                        "[0, 1990] s (estimate) and [0, 1.99] s (reference); check their units and --t-max-diff"]
     assert cli.main(["compare", str(est), str(ref)]) == 0
-    assert capsys.readouterr().err.startswith("note: only 1 of 399 estimated")
+    err = capsys.readouterr().err
+    assert err.startswith(f"note: {est}: stamps counted from 0") and "note: only 1 of 399 estimated" in err
     assert compare_files(ref, ref).notes == []
 
 
