@@ -197,6 +197,9 @@ def test_real_euroc_gyro_matches_at_least_as_well_as_finite_differences(tmp_path
     err_ours = np.sqrt(np.mean((lp(gyro) - ref)[inner] ** 2))
     err_fd = np.sqrt(np.mean((lp(fd) - ref)[inner] ** 2))
     assert err_ours <= err_fd, (err_ours, err_fd)
+    # the ground truth carries IMU biases: an estimator's output, its rotation read as motion
+    spline = json.loads((out / "report.json").read_text())["spline"]
+    assert spline["knot_choice"]["rotation"]["estimated"] is True
 
 
 def test_real_tum_rgbd_with_repeated_stamp_and_gaps(tmp_path, capsys):
@@ -418,3 +421,13 @@ def test_trim_ends_leaves_the_one_sided_ends_out(tmp_path, capsys):
     assert errs["auto"] < 0.2 * errs["0"], errs
     assert run_cli("from-tum", path, "-o", tmp_path / "none", "--trim-ends", 31) == 1
     assert "`--trim-ends` = 31 s at each end leaves nothing of the 60 s of poses" in capsys.readouterr().err
+
+
+def test_rotation_source_flag_reaches_the_fit(tmp_path, ellipse_tum, capsys):
+    """A TUM file carries no biases: its rotation is a measurement unless told otherwise."""
+    for flag, estimated in ((), False), (("--rotation-source", "estimate"), True):
+        out = tmp_path / f"out{int(estimated)}"
+        assert run_cli("from-tum", ellipse_tum, "-o", out, *flag) == 0
+        choice = json.loads((out / "report.json").read_text())["spline"]["knot_choice"]["rotation"]
+        assert choice["estimated"] is estimated and choice["motion_limited"] is estimated
+        assert ("an estimator's output (as told)" in capsys.readouterr().out) is estimated

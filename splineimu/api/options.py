@@ -310,6 +310,11 @@ class SplineOptions(_Checked):
         Time [s] at each end of the poses left out of the synthesized record (default 0);
         ``"auto"``: the fit's end zones (order x knot spacing of either grid: the fit sees
         one-sided data there, see the ``ends_less_accurate`` warning).
+    rotation_source : {"auto", "estimate", "measurement"}
+        ``"estimate"``: the rotations are an estimator's output that fused an IMU, their detail
+        is motion and is kept (the fit's ``estimated_rotation``); ``"measurement"``: not;
+        ``"auto"`` (default): an estimate when the pose file carries IMU biases (EuRoC's
+        ground truth, vicon2gt).
     """
 
     kind: str = "split"
@@ -318,6 +323,7 @@ class SplineOptions(_Checked):
     smoothness: float | None = None
     keep_outliers: bool = False
     trim_ends_s: object = 0.0
+    rotation_source: str = "auto"
     origin: Origin | None = _origin_field()
 
     def __post_init__(self):
@@ -333,6 +339,7 @@ class SplineOptions(_Checked):
             name, kw = self._kw("smoothness")
             self.smoothness = nonnegative_float(self.smoothness, name, **kw)
         self.keep_outliers = self._bool("keep_outliers")
+        self.rotation_source = self._choice("rotation_source", ("auto", "estimate", "measurement"))
         name, kw = self._kw("trim_ends_s")
         self.trim_ends_s = _auto_or(self.trim_ends_s, lambda v: nonnegative_float(v, name, **kw))
 

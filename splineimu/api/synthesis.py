@@ -491,10 +491,18 @@ def _fit(job, track, log):
     origin = int(track.t_ns[0])
     t_s = (track.t_ns - origin).astype(np.float64) / 1e9
     smooth = {} if sp.smoothness is None else {"smoothness": sp.smoothness}  # None: the fit's default
+    # a ground truth that carries IMU biases (EuRoC, vicon2gt) is an estimator's output that fused
+    # that IMU: its rotation's detail is motion (fit's estimated_rotation)
+    biases = getattr(track, "bias_gyro", None) is not None
+    estimated = sp.rotation_source == "estimate" or (sp.rotation_source == "auto" and biases)
+    if estimated and sp.knot_spacing_s == "auto":
+        why = "the file carries IMU biases" if sp.rotation_source == "auto" else "as told"
+        log.line(f"rotation      an estimator's output ({why}): its detail is kept as motion")
     try:
         spl, rep = fit(t_s, track.positions, track.quat_xyzw, kind=sp.kind, order=sp.order,
                        knot_spacing_s=sp.knot_spacing_s, **smooth, origin_ns=origin,
-                       reject_outliers=not sp.keep_outliers, progress=track.t_ns.size > 100_000, return_report=True)
+                       reject_outliers=not sp.keep_outliers, estimated_rotation=estimated,
+                       progress=track.t_ns.size > 100_000, return_report=True)
     except InputError as exc:  # the fit's refusals (a turn of 90 deg or more between poses) name the file
         if exc.path is not None or job.motion.path is None:
             raise

@@ -101,6 +101,10 @@ def add_pose_args(p: argparse.ArgumentParser, fmt_help: str):
                    help="knot spacing in seconds, or auto (default: minimizes the predicted IMU error)")
     g.add_argument("--smoothness", type=float, metavar="MU",
                    help="relative weight of the smoothness penalty (default 1e-10; gaps get 1e-3)")
+    g.add_argument("--rotation-source", choices=["auto", "estimate", "measurement"],
+                   help="the rotations are an estimator's output that fused an IMU (estimate: their detail is "
+                        "the vehicle's motion and is kept) or measurements (their detail may be noise); auto "
+                        "(default): estimate when the file carries IMU biases (EuRoC, vicon2gt)")
     g.add_argument("--trim-ends", metavar="S",
                    help="leave S seconds at each end of the poses out of the IMU record, or auto: the fit's "
                         "end zones (k knot spacings), which see one-sided data (default 0)")
@@ -155,7 +159,7 @@ def options_from_args(args, motion: str):
     else:
         spline = SplineOptions(**_given(args, kind="spline", order="order", knot_spacing_s="knot_spacing",
                                         smoothness="smoothness", keep_outliers="keep_outliers",
-                                        trim_ends_s="trim_ends"), origin=o)
+                                        trim_ends_s="trim_ends", rotation_source="rotation_source"), origin=o)
         source = PosesInput(args.poses, motion, **_given(args, repeated_stamps="repeated_stamps",
                                                          max_gap_s="max_gap", gaps="gaps"), spline=spline, origin=o)
         if args.out is None:

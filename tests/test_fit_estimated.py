@@ -1,0 +1,55 @@
+"""Rotations from an estimator that fused an IMU (EuRoC's ground truth, vicon2gt): their detail
+up to the Nyquist frequency is the vehicle's motion (vibration included), which no test on the
+poses alone tells from pose noise; ``fit(..., estimated_rotation=True)`` keeps it (from-euroc sets
+it for files that carry IMU biases)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from splineimu import fit, lie
+from splineimu.scenes.kinematics import euler_zyx_kinematics, sum_of_sines
+
+RATE_HZ = 200.0
+TWO_PI = 2.0 * np.pi
+
+
+def _vibrating(t, vib=1e-4):
+    """Rotation and body rate: slow turns (0.2-2.3 Hz, 0.05-0.5 rad) and vibration at 19-71 Hz
+    (``vib`` rad, rate ~0.03 rad/s) on each Euler angle."""
+    slow = [((0.3, 0.3, 0.1), (0.1, 1.1, 1.0)), ((0.2, 0.5, 2.0), (0.1, 1.7, 0.3)), ((0.5, 0.2, 0.7), (0.05, 2.3, 1.9))]
+    fast = [((23.0, 0.4), (41.0, 1.3), (67.0, 2.2)), ((29.0, 0.9), (47.0, 0.2), (71.0, 1.7)),
+            ((19.0, 2.4), (37.0, 0.6), (59.0, 0.8))]
+    cols = []
+    for s_axis, f_axis in zip(slow, fast):
+        table = [(a, TWO_PI * f, ph) for a, f, ph in s_axis] + [
+            (vib * w, TWO_PI * f, ph) for w, (f, ph) in zip((1.0, 0.6, 0.3), f_axis)]
+        cols.append(sum_of_sines(t, table))
+    R, w, _ = euler_zyx_kinematics(*(np.column_stack([c[i] for c in cols]) for i in range(3)))
+    return R, w
+
+
+def test_vibration_in_an_estimated_rotation_is_kept():
+    dur = 30.0
+    t = np.arange(0.0, dur + 1e-9, 1.0 / RATE_HZ)
+    R, _ = _vibrating(t)
+    rng = np.random.default_rng(0)
+    q = lie.matrix_to_quat_xyzw(R @ lie.so3_exp(2e-5 * rng.normal(size=(t.size, 3))))
+    p = 1e-5 * rng.normal(size=(t.size, 3))
+    te = np.arange(1.0, dur - 1.0, 0.0025)  # at the poses and between them
+    w0 = _vibrating(te)[1]
+
+    def gyro_error(spl):
+        return float(np.sqrt(np.mean(np.sum((spl.imu(te)[0] - w0) ** 2, axis=1))))
+
+    best = gyro_error(fit(t, p, q, order=6, knot_spacing_s=0.005, reject_outliers=False))
+    spl, rep = fit(t, p, q, return_report=True)
+    # read as pose noise (nothing in the poses says otherwise): 68 ms knots, 3.3x the 5 ms fit's
+    # error, predicted 0.04x the measured
+    assert gyro_error(spl) > 2.5 * best, (gyro_error(spl), best, rep.knot_spacing_s)
+    spl, rep = fit(t, p, q, return_report=True, estimated_rotation=True)
+    e = gyro_error(spl)
+    # measured: 1.8 ms knots, 1.19x, predicted 1.28x the measured
+    assert rep.knot_choice["rotation"]["estimated"] and rep.knot_choice["rotation"]["motion_limited"]
+    assert e < 1.3 * best, (e, best, rep.knot_spacing_s)
+    assert 1 / 3 < rep.predicted_gyro_rms_rad_s / e < 3, (rep.predicted_gyro_rms_rad_s, e)
