@@ -44,7 +44,8 @@ def test_examples_round_trip_through_the_command_line(examples, name):
     "imu: {rate_hz: 333.3, gravity: [0, 0, -9.80665], sampling: mean, increments: true}\n"
     "output: {dir: o, tum: c.tum, bag: ros1, plot: true, force: true}\n",
     "motion:\n  poses: gt.csv\n  max_gap_s: 1.5\n  repeated_stamps: first\n  gaps: split\n"
-    "  spline: {kind: se3, order: 5, knot_spacing_s: 0.025, smoothness: 1e-6, keep_outliers: true}\n"
+    "  spline: {kind: se3, order: 5, knot_spacing_s: 0.025, smoothness: 1e-6, keep_outliers: true,\n"
+    "           rotation_source: estimate}\n"
     "imu: {timestamps: imu0.csv, model: {accelerometer_random_walk: 2.0e-3}, extrinsic: {T_BS: "
     "[[0, -1, 0, 0.1], [1, 0, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]}}\nseed: 0\noutput: {dir: o}\n",
 ])
@@ -56,7 +57,7 @@ def test_every_key_round_trips_through_the_command_line(tmp_path, text):
     every = ({"--t0-ns", "--param", "--rate", "--gravity", "--sampling", "--increments", "--tum", "--bag", "--plot",
               "--force"} if "circle" in text else
              {"--max-gap", "--repeated-stamps", "--gaps", "--spline", "--order", "--knot-spacing", "--smoothness",
-              "--keep-outliers", "--timestamps", "--imu", "--extrinsic", "--seed"})
+              "--keep-outliers", "--rotation-source", "--timestamps", "--imu", "--extrinsic", "--seed"})
     assert every <= set(argv), every - set(argv)
     assert job_from_argv(shlex.split(shlex.join(argv))) == job
 

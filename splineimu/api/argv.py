@@ -14,7 +14,7 @@ FLAGS = {
     "gravity": "--gravity", "sampling": "--sampling", "increments": "--increments", "seed": "--seed",
     "rostopic": "--rostopic", "bag_version": "--bag-version",
     "kind": "--spline", "order": "--order", "knot_spacing_s": "--knot-spacing", "smoothness": "--smoothness",
-    "keep_outliers": "--keep-outliers", "trim_ends_s": "--trim-ends",
+    "keep_outliers": "--keep-outliers", "trim_ends_s": "--trim-ends", "rotation_source": "--rotation-source",
     "path": "POSES", "format": "COMMAND", "repeated_stamps": "--repeated-stamps", "max_gap_s": "--max-gap",
     "gaps": "--gaps",
     "name": "SCENE", "duration_s": "--duration", "t0_ns": "--t0-ns", "params": "--param",
@@ -26,7 +26,7 @@ FLAGS = {
 }
 
 #: The fields of :class:`~splineimu.api.options.SplineOptions` a scene file or a command line gives.
-SPLINE_FIELDS = ("kind", "order", "knot_spacing_s", "smoothness", "keep_outliers", "trim_ends_s")
+SPLINE_FIELDS = ("kind", "order", "knot_spacing_s", "smoothness", "keep_outliers", "trim_ends_s", "rotation_source")
 
 
 def job_argv(job) -> list[str]:
