@@ -53,3 +53,43 @@ def test_vibration_in_an_estimated_rotation_is_kept():
     assert rep.knot_choice["rotation"]["estimated"] and rep.knot_choice["rotation"]["motion_limited"]
     assert e < 1.3 * best, (e, best, rep.knot_spacing_s)
     assert 1 / 3 < rep.predicted_gyro_rms_rad_s / e < 3, (rep.predicted_gyro_rms_rad_s, e)
+
+
+def test_a_track_from_a_file_with_imu_biases_is_fitted_as_an_estimate():
+    """fit(track): the file says what arrays cannot. A track carrying IMU biases (EuRoC's ground
+    truth) is fitted as an estimator's output by default, the same poses as arrays are not; the
+    track's first stamp is the origin."""
+    import pytest
+
+    from splineimu.errors import SplineImuError
+    from splineimu.io import PoseTrack
+
+    t = np.arange(0.0, 20.0 + 1e-9, 1.0 / RATE_HZ)
+    R, _ = _vibrating(t)
+    rng = np.random.default_rng(1)
+    q = lie.matrix_to_quat_xyzw(R @ lie.so3_exp(2e-5 * rng.normal(size=(t.size, 3))))
+    p = 1e-5 * rng.normal(size=(t.size, 3))
+    t_ns = 1_403_715_273_262_142_976 + np.round(t * 1e9).astype(np.int64)
+    plain = PoseTrack(t_ns, p, q)
+    biased = PoseTrack(t_ns, p, q, velocity_world=np.zeros_like(p), bias_gyro=np.zeros_like(p),
+                       bias_accel=np.zeros_like(p))
+    runs = {"arrays": fit(t, p, q, return_report=True), "plain track": fit(plain, return_report=True),
+            "track with biases": fit(biased, return_report=True),
+            "told": fit(t, p, q, return_report=True, estimated_rotation=True),
+            "track told not": fit(biased, return_report=True, estimated_rotation=False)}
+    est = {name: rep.knot_choice["rotation"]["estimated"] for name, (_, rep) in runs.items()}
+    assert est == {"arrays": False, "plain track": False, "track with biases": True, "told": True,
+                   "track told not": False}
+    # the same poses and choice as the arrays told so, on the track's own origin
+    (a, ra), (b, rb) = runs["told"], runs["track with biases"]
+    assert rb.knot_spacing_s == ra.knot_spacing_s < 0.01 < runs["arrays"][1].knot_spacing_s
+    assert b.origin_ns == t_ns[0] and a.origin_ns == 0
+    np.testing.assert_allclose(b.imu(t[100:110])[0], a.imu(t[100:110])[0], atol=1e-12)
+    with pytest.raises(SplineImuError, match="do not pass positions"):
+        fit(biased, p, q)
+    with pytest.raises(SplineImuError, match="do not pass positions"):
+        fit(biased, origin_ns=5)
+    with pytest.raises(SplineImuError, match="track read from a pose file"):
+        fit(t, p)
+    with pytest.raises(SplineImuError, match="estimated_rotation must be"):
+        fit(t, p, q, estimated_rotation="yes")

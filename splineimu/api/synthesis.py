@@ -488,19 +488,12 @@ def _fit(job, track, log):
     from ..spline.fit import fit
 
     sp = job.motion.spline
-    origin = int(track.t_ns[0])
-    t_s = (track.t_ns - origin).astype(np.float64) / 1e9
     smooth = {} if sp.smoothness is None else {"smoothness": sp.smoothness}  # None: the fit's default
-    # a ground truth that carries IMU biases (EuRoC, vicon2gt) is an estimator's output that fused
-    # that IMU: its rotation's detail is motion (fit's estimated_rotation)
-    biases = getattr(track, "bias_gyro", None) is not None
-    estimated = sp.rotation_source == "estimate" or (sp.rotation_source == "auto" and biases)
-    if estimated and sp.knot_spacing_s == "auto":
-        why = "the file carries IMU biases" if sp.rotation_source == "auto" else "as told"
-        log.line(f"rotation      an estimator's output ({why}): its detail is kept as motion")
+    # auto: a ground truth that carries IMU biases (EuRoC, vicon2gt) is an estimator's output that
+    # fused that IMU, and its rotation's detail is motion (fit's estimated_rotation)
+    estimated = {"auto": "auto", "estimate": True, "measurement": False}[sp.rotation_source]
     try:
-        spl, rep = fit(t_s, track.positions, track.quat_xyzw, kind=sp.kind, order=sp.order,
-                       knot_spacing_s=sp.knot_spacing_s, **smooth, origin_ns=origin,
+        spl, rep = fit(track, kind=sp.kind, order=sp.order, knot_spacing_s=sp.knot_spacing_s, **smooth,
                        reject_outliers=not sp.keep_outliers, estimated_rotation=estimated,
                        progress=track.t_ns.size > 100_000, return_report=True)
     except InputError as exc:  # the fit's refusals (a turn of 90 deg or more between poses) name the file
@@ -509,6 +502,9 @@ def _fit(job, track, log):
         at = getattr(exc, "pose_index", None)  # and the line of the pose they name
         line = None if at is None else int(track.line_numbers[at])
         raise InputError(exc.problem, path=job.motion.path, line=line) from None
+    if rep.knot_choice is not None and rep.knot_choice["rotation"].get("estimated"):
+        why = "the file carries IMU biases" if sp.rotation_source == "auto" else "as told"
+        log.line(f"rotation      an estimator's output ({why}): its detail is kept as motion")
     trim = sp.trim_s(rep)
     if trim > 0.0 and rep.knot_choice is not None:  # trimmed ends are not in the record: nothing to warn
         zone = max(c["end_zone_s"] for c in (rep.knot_choice["rotation"], rep.knot_choice["position"]))

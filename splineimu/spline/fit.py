@@ -67,15 +67,41 @@ BIAS_CHECK_POSES = 2000
 RESAMPLED_SPACINGS = 3.0
 
 
-def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="auto", *, position_order=None,
-        position_knot_spacing_s=None, weights=None, smoothness=DEFAULT_SMOOTHNESS, origin_ns=0, max_iter=200,
-        reject_outliers=True, estimated_rotation=False, progress=False, return_report=False):
+def _poses_in(t_s, positions, quat_xyzw, origin_ns, estimated):
+    """fit()'s poses from arrays or from a track (:class:`splineimu.io.PoseTrack`), with the
+    origin and whether the rotations are an estimator's output (``"auto"``: a track whose file
+    carries IMU biases)."""
+    auto = isinstance(estimated, str) and estimated == "auto"
+    if not auto and not isinstance(estimated, (bool, np.bool_)):
+        raise SplineImuError(f"estimated_rotation must be True, False or 'auto', got {estimated!r}")
+    if hasattr(t_s, "t_ns") and hasattr(t_s, "quat_xyzw"):  # a track read from a pose file
+        track = t_s
+        if positions is not None or quat_xyzw is not None or origin_ns is not None:
+            raise SplineImuError("a track gives the times, poses and origin: do not pass positions, quat_xyzw "
+                                 "or origin_ns with it")
+        if auto:
+            estimated = getattr(track, "bias_gyro", None) is not None
+        origin = track.origin_ns
+        t = (track.t_ns - origin).astype(np.float64) / 1e9
+        return t, track.positions, track.quat_xyzw, origin, bool(estimated)
+    if positions is None or quat_xyzw is None:
+        raise SplineImuError("fit() takes times, positions and quat_xyzw, or a track read from a pose file")
+    return t_s, positions, quat_xyzw, 0 if origin_ns is None else origin_ns, not auto and bool(estimated)
+
+
+def fit(t_s, positions=None, quat_xyzw=None, kind="split", order="auto", knot_spacing_s="auto", *,
+        position_order=None, position_knot_spacing_s=None, weights=None, smoothness=DEFAULT_SMOOTHNESS,
+        origin_ns=None, max_iter=200, reject_outliers=True, estimated_rotation="auto", progress=False,
+        return_report=False):
     """Least-squares B-spline through timestamped poses ``world_T_body``.
 
     Parameters
     ----------
-    t_s : (N,) array_like
-        Strictly increasing pose times, seconds since ``origin_ns``.
+    t_s : (N,) array_like, or :class:`splineimu.io.PoseTrack`
+        Strictly increasing pose times, seconds since ``origin_ns``. Or a track read from a pose
+        file (:func:`splineimu.io.read_tum`, :func:`splineimu.io.read_euroc_groundtruth`): its
+        times (from its first stamp, the origin), positions and rotations, and what the file says
+        about its rotations (``estimated_rotation``); ``positions`` and ``quat_xyzw`` are not given then.
     positions : (N, 3) array_like
     quat_xyzw : (N, 4) array_like
         Any sign, not necessarily unit (normalized; a zero quaternion is an error).
@@ -95,8 +121,8 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
         Relative per-pose weights (their scale does not matter; 0 drops a pose from the data term).
     smoothness : float
         Relative weight of the P-spline difference penalty (see module notes).
-    origin_ns : int
-        Integer-nanosecond origin of the time base.
+    origin_ns : int, optional
+        Integer-nanosecond origin of the time base (0; a track's first stamp).
     max_iter : int
         Gauss-Newton iterations of the rotation at most: typical fits converge in 4-6; knots
         finer than the poses (low-rate input) took 104 on 1 Hz poses. Not converging warns
@@ -107,7 +133,7 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
         knot choice made again without them; the report lists them (``dropped_poses``) and
         warns. Before the fit, orientation flips and held poses (a pose repeated exactly at
         later stamps while the input moves, :func:`.checks.held_poses`) are dropped alike.
-    estimated_rotation : bool
+    estimated_rotation : bool or "auto"
         The rotations are an estimator's output that fused an IMU (EuRoC's
         ``state_groundtruth_estimate0``, vicon2gt: files that carry IMU biases), not
         measurements: their detail up to the Nyquist frequency is the vehicle's motion as that
@@ -115,6 +141,9 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
         :mod:`splineimu.spline.knots` step 4). Measured against the real IMU, EuRoC's MAV: read
         as pose noise, V1_01/V2_01/V2_03's ground truth got ~100 ms rotation knots, where V1_02's
         gyro error below 10 Hz is 5.4x its best; the positions are smoothed as measurements.
+        ``"auto"`` (default): True for a track whose file carries IMU biases (EuRoC's 17-column
+        ground truth, vicon2gt), else False. Arrays say nothing of where they come from: pass
+        True for EuRoC's ground truth given as arrays (or TUM text), or fit the track.
     progress : bool
         Show a progress bar for long fits.
     return_report : bool
@@ -144,6 +173,8 @@ def fit(t_s, positions, quat_xyzw, kind="split", order="auto", knot_spacing_s="a
     True
     """
     t0_wall = time.perf_counter()
+    t_s, positions, quat_xyzw, origin_ns, estimated_rotation = _poses_in(t_s, positions, quat_xyzw, origin_ns,
+                                                                         estimated_rotation)
     kind = str(kind).lower()
     if kind not in KINDS:
         raise SplineImuError(f"spline kind must be one of {KINDS}, got {kind!r}")
