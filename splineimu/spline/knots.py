@@ -33,15 +33,19 @@ Method
    above (07: f^-3.8 over 31-63 Hz); the surrogate matches it within 0.8-1.35x there in BROAD
    07, 18 and 32 (0.5x in 07 with an unbounded slope, 2.6-3.5x low in 32 from the cut-off bin;
    a flat continuation missed up to 7x). White, AR(1) and upsampled noise are flat above the
-   cut-off and stay flat; so does motion-limited input (step 4), whose residual is motion.
+   cut-off and stay flat; so does motion-limited input (step 4), whose residual is motion. A
+   rotation residual uncorrelated from pose to pose whose octave above the cut-off reads steeper
+   than f^-1 but which is flat from twice the cut-off up is white noise under motion the fit
+   misses (six-position scene at 100 Hz: f^-2.1 to f^-2.45 there, twice the noise's RMS level),
+   drawn flat at the level of the band above twice the cut-off.
 3. **The derivative's error on a ladder** of spacings (steps of 1.25x around the value-optimal
    one, per order): signal and surrogate are fitted together; the noise part is the surrogate
    fit's derivative, the bias part the change of the signal fit's derivative from the rung
    below less the surrogate's change. That change lags the bias: a bias growing as dt^p
    changes by (1 - 1.25^-p) of itself from the rung below (0.65-0.75 measured for the gyro on
    the ellipse, six-position and rate-table scenes), and the gyro's choice landed a rung too
-   coarse (1.16-1.28x the best fixed setting). Where the noise is white (its spectrum over the
-   octave above the cut-off flatter than f^-1: the surrogate is exact there) the gyro's bias^2
+   coarse (1.16-1.28x the best fixed setting). Where the noise is white (as above, or its spectrum
+   over the octave above the cut-off flatter than f^-1: the surrogate is exact there) the gyro's bias^2
    is doubled (:data:`WHITE_BIAS_LAG`); coloured noise keeps the change as it is (the
    surrogate's misfit is in it too: doubled, BROAD 32 and 35 synthesized more gyro above 15 Hz
    than their real IMU measured). While the smallest error sits at an end of the ladder
@@ -414,11 +418,20 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
     follow = not limited
     k_s, dt_s = (k0, dt0) if follow and dt0 > dt_cvb else (k_cv, dt_cvb)
     want_flat = r == 1 and follow  # the rotation's value error (below) takes the flat continuation
-    noises, flat, slope = noise_surrogates(windows, k_s, dt_s, follow=follow, also_flat=want_flat)
-    if (r == 1 and dt_fixed is None and follow and dt_cvb < PRECISE_CV_POSES * h and slope < PRECISE_SLOPE
-            and table[(k_cv, dt_cvb)] < PRECISE_ROTATION_RAD**2 and noisy()):
+
+    def precise(slope):
         # a rotation more precise than measured ones, whose residual is no white or AR(1) noise
         # and whose value-optimal fit nearly interpolates: motion to the top of the band
+        return (r == 1 and dt_fixed is None and follow and dt_cvb < PRECISE_CV_POSES * h and slope < PRECISE_SLOPE
+                and table[(k_cv, dt_cvb)] < PRECISE_ROTATION_RAD**2 and noisy())
+
+    def white(slope):  # uncorrelated, and flat above twice the cut-off (noise_surrogates), but
+        # steeper than white above the cut-off: motion the fit misses (six-position at 100 Hz:
+        # knots 373 ms, gyro 1.6-1.7x the best fixed setting on 3 of 10 seeds)
+        return r == 1 and follow and lag <= 1 and slope <= WHITE_SLOPE and not precise(slope)
+
+    noises, flat, slope = noise_surrogates(windows, k_s, dt_s, follow=follow, also_flat=want_flat, white=white)
+    if precise(slope):
         limited = True
         noises, flat, slope = noise_surrogates(windows, k_cv, dt_cvb, follow=False, also_flat=False)
     # the gyro's bias estimate lags; for white noise it is corrected (WHITE_BIAS_LAG)

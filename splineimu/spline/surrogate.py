@@ -14,6 +14,10 @@ _MIN_NOISE_SLOPE = -2.0
 #: rounding, not noise (:func:`motion_limited`; exact input 1e-20-5e-13, 0.2 mm noise at 20 Hz
 #: on 0.3 m of hand-held motion 1e-4).
 _ROUNDING_SHARE = 1e-9
+#: Noise read as white (:func:`noise_surrogates`' ``white``) is flat above twice the cut-off:
+#: log-log slope within +-_FLAT_SLOPE over _FLAT_BINS periodogram bins at least.
+_FLAT_SLOPE = 0.5
+_FLAT_BINS = 32
 
 
 def fast_len(n):
@@ -128,7 +132,19 @@ def noise_spectrum(wd, k, dt_cv, rng):
     return P, first, slope, level
 
 
-def noise_surrogates(windows, k, dt_cv, seed=7, follow=True, also_flat=False):
+def _flat_above(P, first):
+    """Whether the noise spectrum P (valid from ``first``) is flat from twice the cut-off to 0.9 of
+    the Nyquist frequency: log-log slope within +-:data:`_FLAT_SLOPE` over :data:`_FLAT_BINS` bins at
+    least. White noise reads 0.00-0.03; BROAD's mocap orientation falls as f^-5 to f^-7 there,
+    AR(1) noise (30 ms) f^-1.4, noise drawn at half the rate and interpolated f^-3.4."""
+    a, b = 2 * first, int(0.9 * P.shape[0])
+    if b - a < _FLAT_BINS:
+        return False
+    power = P[a:b].sum(axis=1)
+    return bool(np.all(power > 0) and abs(np.polyfit(np.log(np.arange(a, b)), np.log(power), 1)[0]) <= _FLAT_SLOPE)
+
+
+def noise_surrogates(windows, k, dt_cv, seed=7, follow=True, also_flat=False, white=None):
     """Noise series (N, 3) per window with the spectrum of the pose noise, for propagation
     through fits: :func:`noise_spectrum` drawn with random phases, continued below its cut-off
     from its level there, flat or (``follow``) with the median over the windows of its slope
@@ -137,6 +153,9 @@ def noise_surrogates(windows, k, dt_cv, seed=7, follow=True, also_flat=False):
     AR(1) and upsampled noise are flat or nearly so above the cut-off and stay flat; noise
     rolling off above its own corner (mocap filters) keeps rising below it, but not faster than
     f^-2 (BROAD orientation against the real gyro: f^-2 from 12 to 40 Hz, f^-3.8 above 31 Hz).
+    ``white`` (a test of the slope read): noise it passes whose spectrum is flat above twice the
+    cut-off (:func:`_flat_above`) is white, drawn flat at the mean level of that band (the level
+    at the cut-off holds motion the fit misses too), and its slope is returned as 0.
     Returns ``(series, flat series or None, slope)``: with ``also_flat`` the same spectra and
     phases continued flat; ``slope`` the median of the windows' slopes as read (NaN: none read),
     before the clip."""
@@ -144,13 +163,19 @@ def noise_surrogates(windows, k, dt_cv, seed=7, follow=True, also_flat=False):
     spectra = [noise_spectrum(wd, k, dt_cv, rng) for wd, rng in zip(windows, rngs)]
     slopes = [sl for _, first, sl, _ in spectra if first is not None and np.isfinite(sl)]
     read = float(np.median(slopes)) if slopes else np.nan
+    flat_white = bool(slopes) and white is not None and white(read) and all(
+        _flat_above(P, first) for P, first, _, _ in spectra if first is not None)
+    if flat_white:
+        read = 0.0
     slope = float(np.clip(read, _MIN_NOISE_SLOPE, 0.0)) if slopes and follow else 0.0
 
     def draw(slope):
         out = []
         for (P, first, _, level), rng, wd in zip(spectra, rngs, windows):
             P = P.copy()
-            if first is not None:
+            if flat_white and first is not None:
+                P[:] = P[2 * first: int(0.9 * P.shape[0])].mean(axis=0)
+            elif first is not None:
                 f = np.maximum(np.arange(first), first / 2.0)
                 P[:first] = level * (f / first)[:, None] ** slope
             rng = copy.deepcopy(rng)  # every draw: the same phases
