@@ -44,15 +44,36 @@ def test_vibration_in_an_estimated_rotation_is_kept():
 
     best = gyro_error(fit(t, p, q, order=6, knot_spacing_s=0.005, reject_outliers=False))
     spl, rep = fit(t, p, q, return_report=True)
-    # read as pose noise (nothing in the poses says otherwise): 68 ms knots, 3.3x the 5 ms fit's
-    # error, predicted 0.04x the measured
+    # read as pose noise: 68 ms knots, 3.3x the 5 ms fit's error, predicted 0.04x the measured;
+    # told: the residual's spectral lines (19-71 Hz) hold 0.029 rad/s of gyro, 23x the prediction
     assert gyro_error(spl) > 2.5 * best, (gyro_error(spl), best, rep.knot_spacing_s)
+    told = [w.message for w in rep.warnings if w.code == "residual_periodic"]
+    assert len(told) == 1 and "lines at 23, 19, 29" in told[0] and "--rotation-source estimate" in told[0], told
+    assert 0.5 * gyro_error(spl) < float(told[0].split("(")[2].split()[0]) < 1.5 * gyro_error(spl), told
     spl, rep = fit(t, p, q, return_report=True, estimated_rotation=True)
     e = gyro_error(spl)
     # measured: 1.8 ms knots, 1.19x, predicted 1.28x the measured
     assert rep.knot_choice["rotation"]["estimated"] and rep.knot_choice["rotation"]["motion_limited"]
     assert e < 1.3 * best, (e, best, rep.knot_spacing_s)
     assert 1 / 3 < rep.predicted_gyro_rms_rad_s / e < 3, (rep.predicted_gyro_rms_rad_s, e)
+    assert "residual_periodic" not in {w.code for w in rep.warnings}
+
+
+def test_periodic_residual_of_exact_periodic_motion_is_not_told():
+    """Exact poses of the screw scene (periodic turning): the residual's lines are rounding
+    (1e-13 rad/s of gyro at 3.2 s knots), below LINE_GYRO_FLOOR; white pose noise has no lines."""
+    from splineimu.scenes import make_scene
+
+    sc = make_scene("screw", duration_s=60.0)
+    t = np.arange(0.0, 60.0 + 1e-9, 1.0 / RATE_HZ)
+    k = sc.kinematics(t)
+    q = lie.matrix_to_quat_xyzw(k.world_R_body)
+    _, rep = fit(t, k.position_world, q, return_report=True)
+    assert "residual_periodic" not in {w.code for w in rep.warnings}
+    noisy = lie.matrix_to_quat_xyzw(k.world_R_body @ lie.so3_exp(np.radians(0.1) * np.random.default_rng(2).normal(
+        size=(t.size, 3))))
+    _, rep = fit(t, k.position_world, noisy, return_report=True)
+    assert "residual_periodic" not in {w.code for w in rep.warnings}
 
 
 def test_a_track_from_a_file_with_imu_biases_is_fitted_as_an_estimate():

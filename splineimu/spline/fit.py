@@ -52,7 +52,7 @@ from .knots import _LADDER, choose_knot_spacing
 from .problem import _Problem
 from .report import FitReport, FitWarning, prediction_warnings
 from .signals import MAX_CONTROL_TURN_RAD, anchor_block, max_rotation_spacing, rotation_increments
-from .surrogate import prediction_at_spacing
+from .surrogate import LINE_GYRO_FLOOR, LINE_SHARE, prediction_at_spacing, residual_lines
 
 #: Poses (the middle ones) on which the rotation spline's bias is checked (:func:`_rotation_bias`).
 BIAS_CHECK_POSES = 2000
@@ -65,6 +65,27 @@ BIAS_CHECK_POSES = 2000
 #: 100 Hz the choice is 4x or more and within the bars, and the 100 Hz poses alone read the
 #: six-position scene's noise as coloured (gyro 1.01 -> 1.65x the best).
 RESAMPLED_SPACINGS = 3.0
+
+
+def _lines_warning(t, res_rot, keep, dt, choice):
+    """``residual_periodic`` where the rotation's residual holds spectral lines (periodic motion
+    such as vibration, :func:`.surrogate.residual_lines`) whose gyro content the knots removed is
+    LINE_SHARE times the predicted gyro error and LINE_GYRO_FLOOR or more; not for rotations read
+    as motion."""
+    rot = choice["rotation"] if choice else None
+    if rot is None or rot["motion_limited"]:
+        return []
+    found = residual_lines(t, np.where(keep[:, None], res_rot, 0.0), dt)
+    pred = choice["predicted_gyro_rms_rad_s"]
+    if found is None or found[0] < max(LINE_SHARE * pred, LINE_GYRO_FLOOR):
+        return []
+    gyro, freqs, peak, _ = found
+    at = ", ".join(f"{x:.3g}" for x in freqs[:3]) + (" ..." if len(freqs) > 3 else "")
+    return [FitWarning("residual_periodic", f"the rotation fit residual holds narrow spectral lines at {at} Hz (up to "
+                       f"{peak:.0f}x the noise around them): periodic motion such as vibration, which the "
+                       f"{1e3 * dt:.3g} ms rotation knots smooth away ({gyro:.3g} rad/s of gyro, {gyro / pred:.1f}x "
+                       "the predicted gyro error); if it is motion (a vibrating body, or an estimator's ground truth "
+                       "such as EuRoC's), --rotation-source estimate (fit: estimated_rotation=True) keeps it")]
 
 
 def _poses_in(t_s, positions, quat_xyzw, origin_ns, estimated):
@@ -345,6 +366,7 @@ def fit(t_s, positions=None, quat_xyzw=None, kind="split", order="auto", knot_sp
     spacings = {"rotation": lay_r[1], "position": lay_p[1]}
     warnings = (prediction_warnings(choice, t) + early_warnings + gap_warnings + warnings
                 + input_warnings(t[on], P[on], theta[on], res_pos[on], res_rot[on], keep[on], choice, spacings))
+    warnings += _lines_warning(t[on], res_rot[on], keep[on], lay_r[1], choice)
     if p_order < 3:  # the CLI refuses it; here a spline for poses alone may be what is wanted
         warnings.append(FitWarning("order_too_low", f"position order {p_order} is piecewise linear: no acceleration "
                                    "between knots, so the accelerometer reads gravity alone; use order 3 or more"))
