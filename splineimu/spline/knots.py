@@ -427,7 +427,7 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
 
     def white(slope):  # uncorrelated, and flat above twice the cut-off (noise_surrogates), but
         # steeper than white above the cut-off: motion the fit misses (six-position at 100 Hz:
-        # knots 373 ms, gyro 1.6-1.7x the best fixed setting on 3 of 10 seeds)
+        # knots 373 ms, gyro 1.6-1.7x the best fixed setting on 4 of 10 seeds)
         return r == 1 and follow and lag <= 1 and slope <= WHITE_SLOPE and not precise(slope)
 
     noises, flat, slope = noise_surrogates(windows, k_s, dt_s, follow=follow, also_flat=want_flat, white=white)
