@@ -125,11 +125,17 @@ def noise_spectrum(wd, k, dt_cv, rng):
         return P, None, np.nan, None
     P[first:] /= np.maximum(gain[first:, None], 0.2)
     band = np.arange(max(first, 1), min(2 * first, P.shape[0] - 1) + 1)
-    power = P[band].sum(axis=1)
     # exact input (a static pose) leaves no residual at all: no slope to read
-    slope = np.polyfit(np.log(band), np.log(power), 1)[0] if band.size >= 4 and np.all(power > 0) else np.nan
+    slope = _loglog_slope(P, band) if band.size >= 4 else np.nan
     level = np.mean(P[band] * (first / band)[:, None] ** slope, axis=0) if np.isfinite(slope) else P[first].copy()
     return P, first, slope, level
+
+
+def _loglog_slope(P, bins):
+    """Log-log slope of the power of P (summed over its columns) over the periodogram ``bins``
+    (NaN where a bin holds no power)."""
+    power = P[bins].sum(axis=1)
+    return float(np.polyfit(np.log(bins), np.log(power), 1)[0]) if np.all(power > 0) else np.nan
 
 
 def _flat_above(P, first):
@@ -138,10 +144,7 @@ def _flat_above(P, first):
     least. White noise reads 0.00-0.03; BROAD's mocap orientation falls as f^-5 to f^-7 there,
     AR(1) noise (30 ms) f^-1.4, noise drawn at half the rate and interpolated f^-3.4."""
     a, b = 2 * first, int(0.9 * P.shape[0])
-    if b - a < _FLAT_BINS:
-        return False
-    power = P[a:b].sum(axis=1)
-    return bool(np.all(power > 0) and abs(np.polyfit(np.log(np.arange(a, b)), np.log(power), 1)[0]) <= _FLAT_SLOPE)
+    return b - a >= _FLAT_BINS and bool(abs(_loglog_slope(P, np.arange(a, b))) <= _FLAT_SLOPE)
 
 
 def noise_surrogates(windows, k, dt_cv, seed=7, follow=True, also_flat=False, white=None):
@@ -184,7 +187,9 @@ def noise_surrogates(windows, k, dt_cv, seed=7, follow=True, also_flat=False, wh
             out.append(np.fft.irfft(np.sqrt(P) * phase, wd.X.shape[0], axis=0))
         return out
 
-    return draw(slope), (draw(0.0) if also_flat else None), read
+    series = draw(slope)
+    # (a flat draw with the same phases is the series itself where that is drawn flat already)
+    return series, (None if not also_flat else series if flat_white or slope == 0.0 else draw(0.0)), read
 
 
 def noise_at_spacing(rms, dt_from, dt_to, r):
