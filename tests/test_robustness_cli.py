@@ -15,10 +15,16 @@ import pytest
 REPO = Path(__file__).resolve().parent.parent
 
 
+def _default_sigint():
+    # a shell starts background jobs with SIGINT ignored, and the children inherit that (Python
+    # then installs no KeyboardInterrupt handler): the user's Ctrl-C reaches a foreground program
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _start(args, cwd):
     env = dict(os.environ, PYTHONPATH=str(REPO))
     return subprocess.Popen([sys.executable, "-m", "splineimu", *args], cwd=cwd, env=env, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+                            stderr=subprocess.PIPE, text=True, preexec_fn=_default_sigint)
 
 
 def _run(args, cwd):
