@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from fit_scenes import noise  # noqa: E402  (the tests' pose noise kinds)
+from fit_scenes import fixed_grid_errors, noise, scene_errors  # noqa: E402  (the tests' pose noise kinds)
 
 from splineimu import fit, lie  # noqa: E402
 from splineimu.scenes.base import Scene  # noqa: E402
@@ -90,13 +90,6 @@ class SumOfSines(Scene):
         return p, v, a, R, w, al
 
 
-def _errors(scene, spl, duration):
-    te = np.arange(1.0, duration - 1.0, 0.005)
-    (g0, f0), (g, f) = scene.imu(te), spl.imu(te)
-    return (float(np.sqrt(np.mean(np.sum((g - g0) ** 2, axis=1)))),
-            float(np.sqrt(np.mean(np.sum((f - f0) ** 2, axis=1)))))
-
-
 def _interpolated(scene, t, pos_noise_m, angle_noise_rad, rng):
     """Positions and quaternions at ``t`` from noisy poses at every other instant: positions
     interpolated linearly, rotations along the geodesic (as an exported trajectory resampled
@@ -127,16 +120,9 @@ def case(motion, draw, kind, rate, pos_noise_m, angle_noise_deg, duration=60.0, 
         q = lie.matrix_to_quat_xyzw(R)
     path = None if cache is None else (Path(cache) / f"{motion}{draw}_{kind}_{rate:g}_{pos_noise_m:g}_"
                                        f"{angle_noise_deg:g}_{duration:g}_{seed}.npy")
-    if path is not None and path.exists():
-        grid = np.load(path)
-    else:
-        grid = np.array([_errors(scene, fit(t, p, q, order=o, knot_spacing_s=float(dt), reject_outliers=False),
-                                 duration) for o in (4, 5, 6) for dt in np.geomspace(0.005, 2.56, 19)])
-        if path is not None:
-            path.parent.mkdir(parents=True, exist_ok=True)
-            np.save(path, grid)
+    grid = fixed_grid_errors(scene, t, p, q, duration, path)
     spl, rep = fit(t, p, q, return_report=True)
-    g, a = _errors(scene, spl, duration)
+    g, a = scene_errors(scene, spl, duration)
     return {"case": f"{motion}{draw} {kind}", "gyro/best": g / grid[:, 0].min(),
             "accel/best": a / grid[:, 1].min(), "pred/meas gyro": rep.predicted_gyro_rms_rad_s / g,
             "pred/meas accel": rep.predicted_accel_rms_m_s2 / a,

@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from fit_scenes import scene_poses  # noqa: E402
+from fit_scenes import gyro_error, scene_poses  # noqa: E402
 
 from splineimu import fit, lie  # noqa: E402
 from splineimu.spline.crossval import _windows  # noqa: E402
@@ -52,11 +52,7 @@ def main(argv=None):
     exact = sc.kinematics(t)
     q_exact = lie.matrix_to_quat_xyzw(exact.world_R_body)
     inside = (t > 1.0) & (t < DURATION_S - 1.0)
-    te = t[inside]
-    omega = sc.imu(te)[0]
-
-    def gyro_error(spl):
-        return float(np.sqrt(np.mean(np.sum((spl.imu(te)[0] - omega) ** 2, axis=1))))
+    error = gyro_error(sc, DURATION_S)
 
     def at(k, dt, P, Q):  # the rotation at (k, dt); the position grid coarse (it does not touch the gyro)
         return fit(t, P, Q, order=k, knot_spacing_s=dt, position_order=4, position_knot_spacing_s=10.0,
@@ -66,7 +62,7 @@ def main(argv=None):
     spl, rep = fit(t, p, q, return_report=True)
     c = rep.knot_choice["rotation"]
     print(f"{args.scene} {args.kind}, {args.rate:g} Hz, seed {args.seed}, {args.scale:g} x 1 mm / 0.1 deg: auto "
-          f"k{rep.order} {1e3 * rep.knot_spacing_s:.1f} ms, gyro {gyro_error(spl):.5f} rad/s (predicted "
+          f"k{rep.order} {1e3 * rep.knot_spacing_s:.1f} ms, gyro {error(spl):.5f} rad/s (predicted "
           f"{rep.predicted_gyro_rms_rad_s:.5f}); noise slope {c['noise_slope']}, bias correction "
           f"{c['bias_correction']}, value-optimal {1e3 * c['cv_knot_spacing_s']:.1f} ms\n")
     print("| rung | pred | true | pred/true | noise est | noise | bias est | bias | proxy bias | SO3 / proxy |")
@@ -75,8 +71,8 @@ def main(argv=None):
         k, dt = row["order"], row["knot_spacing_s"]
         if k not in args.orders:
             continue
-        total = gyro_error(at(k, dt, p, q))
-        bias = gyro_error(at(k, dt, exact.position_world, q_exact))
+        total = error(at(k, dt, p, q))
+        bias = error(at(k, dt, exact.position_world, q_exact))
         noise = float(np.sqrt(max(total**2 - bias**2, 0.0)))
         d = proxy.derivative(k, dt, proxy.zero, 1, 1)[0][inside].copy()
         ref = proxy.derivative(k, dt / 8.0, proxy.zero, 1, 1)[0][inside]

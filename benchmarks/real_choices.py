@@ -25,8 +25,6 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
-
 HERE = Path(__file__).resolve().parent
 DATA = HERE.parent.parent / "shared" / "data"
 
@@ -41,6 +39,7 @@ EUROC = ["euroc/MH_04_difficult_groundtruth.csv", "euroc_V1_02_medium/groundtrut
 def _inputs(extra):
     """(name, loader) pairs; a loader returns the arguments of fit()."""
     from splineimu.io import read_euroc_groundtruth, read_tum
+    from splineimu.io.sniff import guess_format
 
     def tum(path):
         return lambda: (read_tum(path, repeated_stamps="first"),)
@@ -64,8 +63,7 @@ def _inputs(extra):
 
     out += [(f"BROAD {n}", broad(n)) for n in trials]
     for p in extra:
-        text = Path(p).read_text(errors="replace")[:4096]
-        out.append((p, euroc(p) if "," in text.splitlines()[-1] and p.endswith(".csv") else tum(p)))
+        out.append((p, euroc(p) if guess_format(p) == "euroc_gt" else tum(p)))
     return out
 
 
@@ -133,5 +131,4 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    np.seterr(all="ignore")
     main()

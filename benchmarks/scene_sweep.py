@@ -25,6 +25,7 @@ and noise kind.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import sys
@@ -38,45 +39,30 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 SCENES = ("ellipse", "circle", "screw", "flips", "six-position", "rate-table")
 KINDS = ("white", "ar1", "upsampled")
 DURATION_S = 60.0
-GRID = [(k, float(dt)) for k in (4, 5, 6) for dt in np.geomspace(0.005, 2.56, 19)]
 BARS = {"white": 1.15, "ar1": 1.3, "upsampled": 1.3}
-
-
-def _errors(sc, spl):
-    te = np.arange(1.0, DURATION_S - 1.0, 0.005)
-    (g0, f0), (g, f) = sc.imu(te), spl.imu(te)
-    return (float(np.sqrt(np.mean(np.sum((g - g0) ** 2, axis=1)))),
-            float(np.sqrt(np.mean(np.sum((f - f0) ** 2, axis=1)))))
 
 
 def case(args):
     """One row (dict): auto / best fixed per quantity, predicted / measured, choice, warnings."""
     name, kind, seed, rate, scale, cache = args
     os.environ.setdefault("NUMBA_NUM_THREADS", "1")
-    from fit_scenes import scene_poses
+    from fit_scenes import FIXED_GRID, fixed_grid_errors, scene_errors, scene_poses
 
     from splineimu import fit, lie
 
     sc, t, p, R = scene_poses(name, kind, DURATION_S, rate, seed, scale)
     q = lie.matrix_to_quat_xyzw(R)
     path = None if cache is None else Path(cache) / f"{name}_{kind}_{seed}_{rate:g}_{scale:g}.npy"
-    if path is not None and path.exists():
-        grid = np.load(path)
-    else:
-        grid = np.array([_errors(sc, fit(t, p, q, order=k, knot_spacing_s=dt, reject_outliers=False))
-                         for k, dt in GRID])
-        if path is not None:
-            path.parent.mkdir(parents=True, exist_ok=True)
-            np.save(path, grid)
+    grid = fixed_grid_errors(sc, t, p, q, DURATION_S, path)
     spl, rep = fit(t, p, q, return_report=True)
-    g, a = _errors(sc, spl)
+    g, a = scene_errors(sc, spl, DURATION_S)
     ig, ia = int(np.argmin(grid[:, 0])), int(np.argmin(grid[:, 1]))
     return {"scene": name, "kind": kind, "seed": seed, "gyro": g / grid[ig, 0], "accel": a / grid[ia, 1],
             "pred_gyro": rep.predicted_gyro_rms_rad_s / g, "pred_accel": rep.predicted_accel_rms_m_s2 / a,
             "rotation": f"k{rep.order} {1e3 * rep.knot_spacing_s:.1f}",
             "position": f"k{rep.position_order} {1e3 * rep.position_knot_spacing_s:.1f}",
-            "best_gyro": f"k{GRID[ig][0]} {1e3 * GRID[ig][1]:.0f}",
-            "best_accel": f"k{GRID[ia][0]} {1e3 * GRID[ia][1]:.0f}",
+            "best_gyro": f"k{FIXED_GRID[ig][0]} {1e3 * FIXED_GRID[ig][1]:.0f}",
+            "best_accel": f"k{FIXED_GRID[ia][0]} {1e3 * FIXED_GRID[ia][1]:.0f}",
             "warnings": ",".join(sorted({w.code for w in rep.warnings})) or "-"}
 
 
@@ -105,8 +91,8 @@ def main(argv=None):
     print(f"{args.rate:g} Hz, {args.scale:g} x (1 mm / 0.1 deg) pose noise, 60 s; auto / best fixed per quantity\n")
     print("| case | " + " | ".join(keys) + " | |\n|" + " --- |" * (len(keys) + 2))
     rows = []
-    with ProcessPoolExecutor(args.jobs) if args.jobs > 1 else _Serial() as pool:
-        for row in pool.map(case, jobs):
+    with ProcessPoolExecutor(args.jobs) if args.jobs > 1 else contextlib.nullcontext() as pool:
+        for row in (pool.map if pool else map)(case, jobs):
             rows.append(row)
             bar = BARS[row["kind"]]
             ratio_miss = max(row["gyro"], row["accel"]) > bar
@@ -131,17 +117,6 @@ def main(argv=None):
             preds = [r[key] for r in rs for key in ("pred_gyro", "pred_accel")]
             print(f"| {s} | {k} | {wg['gyro']:.3f} ({wg['seed']}) | {wa['accel']:.3f} ({wa['seed']}) | "
                   f"{min(preds):.2f}-{max(preds):.2f} | {BARS[k]} |")
-
-
-class _Serial:
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        return False
-
-    def map(self, f, items):
-        return map(f, items)
 
 
 if __name__ == "__main__":

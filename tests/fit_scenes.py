@@ -81,6 +81,37 @@ def imu_errors(spl, duration_s, margin=1.0, exclude=None):
     return rms(g - g0), rms(f - f0)
 
 
+#: The fixed grid the automatic fit is compared with in the benchmarks (orders 4-6 x 19 spacings
+#: 5 ms-2.56 s, one spacing for rotation and position).
+FIXED_GRID = tuple((k, float(dt)) for k in (4, 5, 6) for dt in np.geomspace(0.005, 2.56, 19))
+
+
+def scene_errors(sc, spl, duration_s, margin=1.0):
+    """RMS gyro [rad/s] and specific-force [m/s^2] errors of ``spl`` against scene ``sc`` on
+    [margin, duration - margin] at 200 Hz."""
+    te = np.arange(margin, duration_s - margin, 0.005)
+    (g0, f0), (g, f) = sc.imu(te), spl.imu(te)
+    return (float(np.sqrt(np.mean(np.sum((g - g0) ** 2, axis=1)))),
+            float(np.sqrt(np.mean(np.sum((f - f0) ** 2, axis=1)))))
+
+
+def fixed_grid_errors(sc, t, p, q, duration_s, path=None):
+    """(len(FIXED_GRID), 2) array of :func:`scene_errors` of each fixed setting's fit (without
+    outlier rejection); kept in the .npy file ``path`` if given (they do not depend on the
+    automatic choice, so a change to it is measured again in a minute)."""
+    from pathlib import Path
+
+    path = None if path is None else Path(path)
+    if path is not None and path.exists():
+        return np.load(path)
+    grid = np.array([scene_errors(sc, fit(t, p, q, order=k, knot_spacing_s=dt, reject_outliers=False), duration_s)
+                     for k, dt in FIXED_GRID])
+    if path is not None:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        np.save(path, grid)
+    return grid
+
+
 def best_fixed(t, p, q, duration_s, settings, exclude=None):
     """Best gyro and best accel error over fixed (order, spacing) settings (one spacing for both)."""
     errs = [imu_errors(fit(t, p, q, order=k, knot_spacing_s=dt, reject_outliers=exclude is None), duration_s,

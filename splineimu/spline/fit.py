@@ -79,7 +79,7 @@ def _lines_warning(t, res_rot, keep, dt, choice):
     pred = choice["predicted_gyro_rms_rad_s"]
     if found is None or found[0] < max(LINE_SHARE * pred, LINE_GYRO_FLOOR):
         return []
-    gyro, freqs, peak, _ = found
+    gyro, freqs, peak = found
     at = ", ".join(f"{x:.3g}" for x in freqs[:3]) + (" ..." if len(freqs) > 3 else "")
     return [FitWarning("residual_periodic", f"the rotation fit residual holds narrow spectral lines at {at} Hz (up to "
                        f"{peak:.0f}x the noise around them): periodic motion such as vibration, which the "

@@ -37,15 +37,16 @@ def fast_len(n):
     return best
 
 
-def band_power(d, taper=False):
+def band_power(d, taper=False, pad=True):
     """Periodogram (summed over the columns) of the rows of d less their mean, zero-padded to
-    :func:`fast_len` (band powers over octaves are those of the unpadded series, smoothed);
-    with ``taper``, of the centred rows times a Hann window (centred before the taper only:
-    centring after would add back the plain window's leakage)."""
+    :func:`fast_len` (band powers over octaves are those of the unpadded series, smoothed; not
+    with ``pad`` False, where single bins matter); with ``taper``, of the centred rows times a
+    Hann window (centred before the taper only: centring after would add back the plain
+    window's leakage)."""
     d = d - d.mean(axis=0)
     if taper:
         d = d * np.hanning(d.shape[0])[:, None]
-    return (np.abs(np.fft.rfft(d, fast_len(d.shape[0]), axis=0)) ** 2).sum(axis=1)
+    return (np.abs(np.fft.rfft(d, fast_len(d.shape[0]) if pad else d.shape[0], axis=0)) ** 2).sum(axis=1)
 
 
 def _falls(P):
@@ -264,7 +265,7 @@ _LINE_MAX_POSES = 1 << 17  # the middle of longer inputs
 def residual_lines(t, res, dt):
     """Narrow spectral lines in a rotation fit's residual ``res`` (N, 3; rad, poses at ``t``)
     above 1.5x the cut-off of knots ``dt`` apart: ``(gyro RMS of their content [rad/s], their
-    frequencies [Hz], strongest first, the strongest's ratio to the median around it, bins)``,
+    frequencies [Hz], strongest first, the strongest's ratio to the median around it)``,
     or None where there are none. A vibrating body's rotation measured above the mocap noise
     gives lines (slow turns plus 19-71 Hz vibration of 1e-4 rad under 2e-5 rad white noise:
     peaks 1e4x the noise, 0.03 rad/s of gyro the fit removed, predicted 0.001); so does EuRoC
@@ -279,7 +280,7 @@ def residual_lines(t, res, dt):
     if n < 8 * _LINE_BLOCK:
         return None
     h = float(np.median(np.diff(t)))
-    P = (np.abs(np.fft.rfft(res - res.mean(axis=0), axis=0)) ** 2).sum(axis=1)
+    P = band_power(res, pad=False)
     f = np.fft.rfftfreq(n, h)
     m = P.size // _LINE_BLOCK * _LINE_BLOCK
     base = np.repeat(np.median(P[:m].reshape(-1, _LINE_BLOCK), axis=1), _LINE_BLOCK)
@@ -299,4 +300,4 @@ def residual_lines(t, res, dt):
     for i in peaks:
         if all(abs(f[i] - g) > max(0.2, 0.01 * g) for g in freqs):
             freqs.append(float(f[i]))
-    return gyro, freqs, float(ratio[peaks[0]]), int(idx.size)
+    return gyro, freqs, float(ratio[peaks[0]])
