@@ -133,7 +133,8 @@ PAIRS = {
     # held out: the other BROAD trials with mocap (data_hdf5 of github.com/dlaidig/broad), read
     # from the folders in $BROAD_DATA (os.pathsep-separated) when not in ../shared/data/broad
     **{f"broad{n}": (lambda n=n: load_broad(n)) for n in
-       ("02", "03", "05", "10", "11", "12", "14", "15", "18", "30", "31", "32", "33", "34", "35", "36")},
+       ("02", "03", "05", "10", "11", "12", "14", "15", "18", "24", "25", "27", "30", "31", "32", "33", "34", "35",
+        "36")},
     "euroc200": lambda: load_euroc("groundtruth.csv", "EuRoC V1_02 200 Hz"),
     "euroc20": lambda: load_euroc("groundtruth_vicon2gt_20hz.csv", "EuRoC V1_02 20 Hz vicon2gt"),
     # held out, not in ../shared/data: $EUROC_MH01 = "<MH_01_easy.txt>,<imu0 data.csv>"
