@@ -11,6 +11,7 @@ import numpy as np
 from .._kernels import cv as _kcv
 from .banded import DEFAULT_SMOOTHNESS, SPARSE_SMOOTHNESS, difference_coefficients, layout
 from .basis import blending_matrix
+from .phase import grid_layout
 from .signals import accumulate
 
 N_FOLDS = 4
@@ -79,11 +80,13 @@ class _Window:
     def folds(self, block):
         return ((self.index // max(int(block), 1)) % N_FOLDS).astype(np.int64)
 
-    def fit_folds(self, k, dt, fold, nfold, X=None):
+    def fit_folds(self, k, dt, fold, nfold, X=None, origin=None):
         """Control points (nfold, n, d) of the fits of X (default: the signal) without each
-        fold, the samples' spline parameters, segments and basis rows, and the layout."""
+        fold, the samples' spline parameters, segments and basis rows, and the layout (knots
+        from the window's first pose, or on the grid ``origin + i dt``)."""
         X = self.X if X is None else X
-        t0, dt_, nseg, n = layout(self.t[0], self.t[-1], dt, k)
+        t0, dt_, nseg, n = (layout(self.t[0], self.t[-1], dt, k) if origin is None
+                            else grid_layout(self.t[0], self.t[-1], origin, dt, k))
         s = np.ascontiguousarray((self.t - t0) / dt_)
         sizes = (0.0,) * k, (0.0,) * X.shape[1]  # compile-time order and column count
         H = self._scratch("H", (nfold, n, k), zero=True)
@@ -107,17 +110,17 @@ class _Window:
                                     *sizes)
         return (total if np.isfinite(total) else np.inf), self.n_scored
 
-    def derivative(self, k, dt, fold, nfold, r, X=None):
+    def derivative(self, k, dt, fold, nfold, r, X=None, origin=None):
         """r-th derivative of the fits without each fold (nfold, N, d) at every sample (valid
         until the next call)."""
-        C, s, _, _, nseg, dt_, sizes = self.fit_folds(k, dt, fold, nfold, X)
+        C, s, _, _, nseg, dt_, sizes = self.fit_folds(k, dt, fold, nfold, X, origin)
         out = self._scratch("out", (nfold, self.t.size, C.shape[2]))
         for f in range(nfold):
             _kcv.derivative_at(s, C[f], _blending(k), nseg, 1.0 / dt_, r, out[f], *sizes)
         return out
 
-    def residual(self, k, dt):
-        d = self.derivative(k, dt, self.zero, 1, 0)[0]
+    def residual(self, k, dt, origin=None):
+        d = self.derivative(k, dt, self.zero, 1, 0, origin=origin)[0]
         return (self.X - d)[self.scored]
 
 

@@ -49,6 +49,7 @@ from .controls import _quat_wxyz
 from .core import KINDS, Spline
 from .crossval import MAX_CV_POSES, _windows
 from .knots import _LADDER, choose_knot_spacing
+from .phase import shifted_layout
 from .problem import _Problem
 from .report import FitReport, FitWarning, prediction_warnings
 from .signals import MAX_CONTROL_TURN_RAD, anchor_block, max_rotation_spacing, rotation_increments
@@ -261,7 +262,12 @@ def fit(t_s, positions=None, quat_xyzw=None, kind="split", order="auto", knot_sp
             # one grid: the finer spacing, the position's order (the accelerometer's)
             rdt = pdt = min(rdt, pdt)
             ro = po = max(ro, po)
-        lay_r, lay_p = layout(t[0], t[-1], rdt, ro), layout(t[0], t[-1], pdt, po)
+        # (a split spline's rotation grid may start before the first pose: .phase; an se3
+        # spline's one grid starts on it)
+        if ch is not None and kind == "se3":
+            ch["rotation"]["knot_phase"] = 0.0
+        phase = ch["rotation"]["knot_phase"] if ch is not None else 0.0
+        lay_r, lay_p = shifted_layout(t[0], t[-1], rdt, ro, phase), layout(t[0], t[-1], pdt, po)
         if kind == "se3" and ch is not None:  # the predictions moved to that spacing: the
             # interior's, and the noise it adds to the ends' and gaps' (and the end zones of the grid)
             for key, r in (("rotation", 1), ("position", 2)):

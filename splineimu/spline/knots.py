@@ -102,6 +102,8 @@ Method
    rad/s: a 90-degree limit held it at 2.4 s, gyro 1.11-1.28x the fixed fit at 2.56 s, now
    0.77-0.87x at 3.5 s). The control rotations beyond the data extrapolate the turn; the
    fit's prior on them keeps Gauss-Newton converging (``END_TURN_SIGMA_RAD``).
+6. **The rotation grid's phase** (:mod:`.phase`): shifted by quarters of the spacing, and one
+   segment more or less, the grid whose fit leaves the least residual (``knot_phase``).
 
 Cost: per (order, spacing) one pass over the poses for the normal equations of all folds,
 banded Cholesky solves of the control-point size and one pass for the predictions, each one
@@ -114,13 +116,9 @@ property), so the choice costs the same for a minute and for an hour; each windo
 :data:`MIN_WINDOW_S` at least, so above 333 Hz the windows hold more poses (10 kHz: 120 000
 a window, 30x those at 200 Hz; 20 s of ellipse at 10 kHz, one window: the fit took 3.9 s CPU
 against 1.2 s with 0.4 s windows, gyro / accel 1.05x / 1.03x the best fixed setting against
-14x / 10x). Measured (12k poses,
-benchmarks/bench_knots.py): ~1.75x scipy's interpolation of the same poses (load ~1); the
-kernels sum in the order of the fitting kernels and of numpy, so the choices are those of the
-implementation they replaced (its reported figures to 1e-13 on noisy and real poses, to
-1e-9 on exact poses, whose scores are rounding noise). Going further means fewer fits
-(candidates from tabulated transfer functions), which moves the flat cross-validation optima by
-a grid step.
+14x / 10x). Measured: benchmarks/bench_knots.py (12k poses, against scipy's interpolation of
+the same poses). Going further means fewer fits (candidates from tabulated transfer functions),
+which moves the flat cross-validation optima by a grid step.
 
 Where it fails: noise correlated over longer than the motion's own time scale is motion to any
 method that sees only the poses (it is kept); noise whose level changes along the recording
@@ -145,6 +143,7 @@ import numpy as np
 from .._kernels import cv as _kcv
 from ..errors import SplineImuError
 from .crossval import _STEP, _correlation_lag, _search, _windows
+from .phase import choose_phase
 from .signals import MAX_CONTROL_TURN_RAD, anchor_block, max_rotation_spacing, rotation_increments
 from .surrogate import motion_limited, noise_surrogates, noise_under_motion, rounding_only
 from .zones import end_bias2, find_gaps, gap_predictions
@@ -509,7 +508,9 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
         "gaps": [{"t_start_s": a, "t_end_s": b, "predicted_rms": e} for a, b, e in gaps],
         "candidates": rows,
     }
-    if r == 1:
+    if r == 1:  # where the grid sits against the turns (step 6)
+        phase = (0.0, dt) if dt_fixed else choose_phase(windows, noises, k, dt, t[0], t[-1])
+        out["knot_phase"], out["knot_spacing_s"] = phase
         # the rotation's own (value) error at the choice: it tilts gravity into the accelerometer.
         # The value weighs the noise far below the cut-off alike, where the continuation's slope
         # (read where motion the fit misses adds to the residual) overstated white noise 3x (rate

@@ -72,7 +72,9 @@ class FitReport:
         return d
 
     def summary(self) -> str:
-        grid = (f"rotation order {self.order}, knot spacing {self.knot_spacing_s * 1e3:.3f} ms; position order "
+        phase = (self.knot_choice or {}).get("rotation", {}).get("knot_phase", 0.0) if self.kind == "split" else 0.0
+        shift = f" (from {phase * self.knot_spacing_s * 1e3:.3f} ms before the first pose)" if phase else ""
+        grid = (f"rotation order {self.order}, knot spacing {self.knot_spacing_s * 1e3:.3f} ms{shift}; position order "
                 f"{self.position_order}, knot spacing {self.position_knot_spacing_s * 1e3:.3f} ms"
                 if self.kind == "split" else f"order {self.order}, knot spacing {self.knot_spacing_s * 1e3:.3f} ms")
         lines = [
