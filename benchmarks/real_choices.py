@@ -76,11 +76,15 @@ def row(name, args):
     ch = rep.knot_choice or {}
     rot = ch.get("rotation", {})
     return {"input": name, "poses": rep.n_poses,
-            "rotation": [rep.order, round(rep.knot_spacing_s, 6)],
+            "rotation": [rep.order, round(rep.knot_spacing_s, 6), float(rot.get("knot_phase", 0.0))],
             "position": [rep.position_order, round(rep.position_knot_spacing_s, 6)],
             "gyro": rep.predicted_gyro_rms_rad_s, "accel": rep.predicted_accel_rms_m_s2,
             "as_motion": bool(rot.get("estimated") or rot.get("motion_limited")),
             "warnings": sorted({w.code for w in rep.warnings}), "cpu_s": round(cpu, 3)}
+
+
+def _shift(r):
+    return f" (shift {r['rotation'][2]:g})" if r["rotation"][2] else ""
 
 
 def _differs(a, b):
@@ -88,6 +92,9 @@ def _differs(a, b):
     for key in ("rotation", "position"):
         if a[key][0] != b[key][0] or abs(a[key][1] / b[key][1] - 1.0) > 1e-3:
             out.append(f"{key} k{b[key][0]} {1e3 * b[key][1]:.2f} ms -> k{a[key][0]} {1e3 * a[key][1]:.2f} ms")
+    phase = [(r["rotation"] + [0.0])[2] for r in (b, a)]  # (rows written before the grid's phase: 0)
+    if phase[0] != phase[1]:
+        out.append(f"rotation grid shifted by {phase[0]:g} -> {phase[1]:g} of a spacing")
     for key in ("gyro", "accel"):
         if a[key] is not None and b[key] is not None and abs(a[key] / b[key] - 1.0) > 0.01:
             out.append(f"predicted {key} {b[key]:.4g} -> {a[key]:.4g}")
@@ -114,7 +121,7 @@ def main(argv=None):
         r = row(name, load())
         rows.append(r)
         if before is None:
-            print(f"| {name} | {r['poses']} | k{r['rotation'][0]} {1e3 * r['rotation'][1]:.2f} ms | "
+            print(f"| {name} | {r['poses']} | k{r['rotation'][0]} {1e3 * r['rotation'][1]:.2f} ms{_shift(r)} | "
                   f"k{r['position'][0]} {1e3 * r['position'][1]:.2f} ms | {r['gyro']:.4g} | {r['accel']:.4g} | "
                   f"{'yes' if r['as_motion'] else '-'} | {', '.join(r['warnings']) or '-'} | {r['cpu_s']:.2f} |",
                   flush=True)

@@ -56,10 +56,11 @@ def case(args):
     grid = fixed_grid_errors(sc, t, p, q, DURATION_S, path)
     spl, rep = fit(t, p, q, return_report=True)
     g, a = scene_errors(sc, spl, DURATION_S)
+    phase = rep.knot_choice["rotation"]["knot_phase"]  # the rotation grid's shift (spacings before the first pose)
     ig, ia = int(np.argmin(grid[:, 0])), int(np.argmin(grid[:, 1]))
     return {"scene": name, "kind": kind, "seed": seed, "gyro": g / grid[ig, 0], "accel": a / grid[ia, 1],
             "pred_gyro": rep.predicted_gyro_rms_rad_s / g, "pred_accel": rep.predicted_accel_rms_m_s2 / a,
-            "rotation": f"k{rep.order} {1e3 * rep.knot_spacing_s:.1f}",
+            "rotation": f"k{rep.order} {1e3 * rep.knot_spacing_s:.1f}" + (f" +{phase:g}" if phase else ""),
             "position": f"k{rep.position_order} {1e3 * rep.position_knot_spacing_s:.1f}",
             "best_gyro": f"k{FIXED_GRID[ig][0]} {1e3 * FIXED_GRID[ig][1]:.0f}",
             "best_accel": f"k{FIXED_GRID[ia][0]} {1e3 * FIXED_GRID[ia][1]:.0f}",
