@@ -48,7 +48,8 @@ from .checks import (
 from .controls import _quat_wxyz
 from .core import KINDS, Spline
 from .crossval import MAX_CV_POSES, _windows
-from .knots import _LADDER, choose_knot_spacing
+from .knots import choose_knot_spacing
+from .ladder import _LADDER
 from .phase import shifted_layout
 from .problem import _Problem
 from .report import FitReport, FitWarning, prediction_warnings
