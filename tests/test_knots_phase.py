@@ -7,8 +7,8 @@ import pytest
 from fit_scenes import scene_errors, scene_poses
 
 from splineimu import fit, lie
-from splineimu.spline.banded import layout
-from splineimu.spline.phase import PHASES, grid_layout, shifted_layout
+from splineimu.spline.banded import grid_layout, layout, shifted_layout
+from splineimu.spline.phase import PHASES
 
 
 @pytest.mark.parametrize("origin", [-0.37, 0.0, 0.2, 5.0, -1e3])

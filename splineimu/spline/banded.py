@@ -78,6 +78,24 @@ def layout(t_first, t_last, knot_spacing_s, order):
     return float(t_first), dt, nseg, nseg + order - 1
 
 
+def grid_layout(t_first, t_last, origin, dt, order):
+    """Knot layout (t0, dt, n_segments, n_control) of the grid ``origin + i dt`` over
+    [t_first, t_last]: its first knot is the last one at or before ``t_first`` (a rotation grid
+    shifted against the motion, :mod:`.phase`)."""
+    m = np.floor((t_first - origin) / dt + 1e-9)
+    t0 = float(origin + m * dt)
+    nseg = max(1, int(np.ceil((t_last - t0) / dt - 1e-9)))
+    return t0, float(dt), nseg, nseg + order - 1
+
+
+def shifted_layout(t_first, t_last, dt, order, phase):
+    """:func:`layout`, the grid moved ``phase`` spacings before ``t_first``."""
+    lay = layout(t_first, t_last, dt, order)
+    if phase == 0.0:
+        return lay
+    return grid_layout(t_first, t_last, t_first - phase * lay[1], lay[1], order)
+
+
 def segments(t, t0, dt):
     """Segment index (int64) and the fraction u in [0, 1] of the knot spacing within it, of
     times ``t`` on the knots ``t0 + i dt``, without the rounding of ``s = (t - t0) / dt``: s

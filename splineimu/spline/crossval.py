@@ -9,9 +9,8 @@ from functools import cache
 import numpy as np
 
 from .._kernels import cv as _kcv
-from .banded import DEFAULT_SMOOTHNESS, SPARSE_SMOOTHNESS, difference_coefficients, layout
+from .banded import DEFAULT_SMOOTHNESS, SPARSE_SMOOTHNESS, difference_coefficients, grid_layout, layout
 from .basis import blending_matrix
-from .phase import grid_layout
 from .signals import accumulate
 
 N_FOLDS = 4

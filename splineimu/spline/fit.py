@@ -30,7 +30,7 @@ import numpy as np
 from .. import lie
 from .._kernels import gauss_newton as _gn
 from ..errors import InputError, SplineImuError
-from .banded import DEFAULT_SMOOTHNESS, layout
+from .banded import DEFAULT_SMOOTHNESS, layout, shifted_layout
 from .checks import (
     check_rotation_steps,
     check_stamp_clusters,
@@ -50,7 +50,6 @@ from .core import KINDS, Spline
 from .crossval import MAX_CV_POSES, _windows
 from .knots import choose_knot_spacing
 from .ladder import _LADDER
-from .phase import shifted_layout
 from .problem import _Problem
 from .report import FitReport, FitWarning, prediction_warnings
 from .signals import MAX_CONTROL_TURN_RAD, anchor_block, max_rotation_spacing, rotation_increments

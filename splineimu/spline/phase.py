@@ -53,23 +53,6 @@ MIN_SEGMENTS_TO_STEP = 40
 NOISE_SPREADS = 2.0
 
 
-def grid_layout(t_first, t_last, origin, dt, order):
-    """Knot layout (t0, dt, n_segments, n_control) of the grid ``origin + i dt`` over
-    [t_first, t_last]: its first knot is the last one at or before ``t_first``."""
-    m = np.floor((t_first - origin) / dt + 1e-9)
-    t0 = float(origin + m * dt)
-    nseg = max(1, int(np.ceil((t_last - t0) / dt - 1e-9)))
-    return t0, float(dt), nseg, nseg + order - 1
-
-
-def shifted_layout(t_first, t_last, dt, order, phase):
-    """:func:`.banded.layout`, the grid moved ``phase`` spacings before ``t_first``."""
-    lay = layout(t_first, t_last, dt, order)
-    if phase == 0.0:
-        return lay
-    return grid_layout(t_first, t_last, t_first - phase * lay[1], lay[1], order)
-
-
 def choose_phase(windows, noises, k, dt, t_first, t_last):
     """``(phase, spacing)`` of the order-``k`` grid over [t_first, t_last] whose fits of the
     windows' signals leave the least squared residual (or ``(0.0, dt)``, see module notes)."""
