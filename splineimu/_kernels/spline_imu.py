@@ -88,8 +88,9 @@ def split_imu_knots(increments):
 
 
 @jit(inline="always")
-def _exp_coefficients(b, n):
-    """``(cos t, b sin t / t, b^2 (1 - cos t) / t^2)`` at ``t = b n``, from the half angle."""
+def _exp_terms(b, n):
+    """``(cos t, b sin t / t, b^2 (1 - cos t) / t^2, sin t / t, (t / 2)^2)`` at ``t = b n``, from
+    the half angle."""
     h = 0.5 * (b * n)
     x = h * h
     # Estrin's scheme: a dependency chain of 5 multiply-adds rather than Horner's 10, which
@@ -103,7 +104,15 @@ def _exp_coefficients(b, n):
         + ((CS8 + CS9 * x) + CS10 * x2) * x8
     # sin t / t = ps pc, (1 - cos t) / t^2 = ps^2 / 2, 1 - cos t = 2 (h ps)^2
     sh = h * ps
-    return 1.0 - 2.0 * (sh * sh), (ps * pc) * b, (0.5 * (ps * ps)) * (b * b)
+    sinc = ps * pc
+    return 1.0 - 2.0 * (sh * sh), sinc * b, (0.5 * (ps * ps)) * (b * b), sinc, x
+
+
+@jit(inline="always")
+def _exp_coefficients(b, n):
+    """``(cos t, b sin t / t, b^2 (1 - cos t) / t^2)`` at ``t = b n``, from the half angle."""
+    ct, al, be, _, _ = _exp_terms(b, n)
+    return ct, al, be
 
 
 @jit(inline="always")
