@@ -72,6 +72,7 @@ def test_smooth_motion_keeps_the_grid_on_the_first_pose():
 def test_se3_and_given_spacings_keep_the_grid_on_the_first_pose():
     sc, (t, p, q), spl, rep = _fit("rate-table", "upsampled", 5, kind="se3")
     assert rep.knot_choice["rotation"]["knot_phase"] == 0.0
-    assert spl.t0_s == 0.0 and (spl.t_min_s, spl.t_max_s) == (0.0, 60.0)
+    # (the grid's end t0 + n dt rounds: within 1e-15 relative of the last pose)
+    assert spl.t0_s == 0.0 and spl.t_min_s == 0.0 and spl.t_max_s == pytest.approx(60.0, rel=1e-15, abs=0.0)
     spl, rep = fit(t, p, q, knot_spacing_s=0.5, return_report=True)
     assert rep.knot_choice["rotation"]["knot_phase"] == 0.0 and spl.t0_s == 0.0

@@ -257,18 +257,16 @@ def fit(t_s, positions=None, quat_xyzw=None, kind="split", order="auto", knot_sp
         ch = None
         if "auto" in given:
             on = chosen_on
+            # (a split spline's rotation grid may start before the first pose: .phase; an se3
+            # spline's one grid starts on it)
             ch = choose_knot_spacing(t[on], P[on], R[on], wts[on], ro, po, None if rdt == "auto" else rdt,
-                                     None if pdt == "auto" else pdt, turn, estimated_rotation)
+                                     None if pdt == "auto" else pdt, turn, estimated_rotation, kind == "split")
             ro, rdt = ch["rotation"]["order"], ch["rotation"]["knot_spacing_s"]
             po, pdt = ch["position"]["order"], ch["position"]["knot_spacing_s"]
         if kind == "se3":
             # one grid: the finer spacing, the position's order (the accelerometer's)
             rdt = pdt = min(rdt, pdt)
             ro = po = max(ro, po)
-        # (a split spline's rotation grid may start before the first pose: .phase; an se3
-        # spline's one grid starts on it)
-        if ch is not None and kind == "se3":
-            ch["rotation"]["knot_phase"] = 0.0
         phase = ch["rotation"]["knot_phase"] if ch is not None else 0.0
         lay_r, lay_p = shifted_layout(t[0], t[-1], rdt, ro, phase), layout(t[0], t[-1], pdt, po)
         if kind == "se3" and ch is not None:  # the predictions moved to that spacing: the

@@ -211,11 +211,14 @@ def _best(table, orders):
     return k_best, best[k_best][1], best
 
 
-def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, increments=False, as_motion=False):
+def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, increments=False, as_motion=False,
+                  grid_phase=True):
     """Order and spacing (at most ``dt_max``) for an ordinary B-spline fit of signal X (N, 3)
     (or, with ``increments``, of the sums of X (N - 1, 3)) whose r-th derivative matters;
     returns a dict (see :func:`choose_knot_spacing`). ``as_motion``: X is known to hold motion to
-    the top of its band (an estimator's output): read as motion-limited input, in blocks of one pose."""
+    the top of its band (an estimator's output): read as motion-limited input, in blocks of one pose.
+    ``grid_phase``: for the rotation (r = 1), where its grid sits against the motion is chosen too
+    (step 6); otherwise it starts on the first pose."""
     orders = tuple(int(k) for k in orders)
     windows = _windows(t, X, w, increments)
     h = float(np.median(np.diff(t)))
@@ -363,7 +366,7 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
         "candidates": rows,
     }
     if r == 1:  # where the grid sits against the turns (step 6)
-        phase = (0.0, dt) if dt_fixed else choose_phase(windows, noises, k, dt, t[0], t[-1])
+        phase = (0.0, dt) if dt_fixed or not grid_phase else choose_phase(windows, noises, k, dt, t[0], t[-1])
         out["knot_phase"], out["knot_spacing_s"] = phase
         # the rotation's own (value) error at the choice: it tilts gravity into the accelerometer.
         # The value weighs the noise far below the cut-off alike, where the continuation's slope
@@ -408,7 +411,7 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
 
 def choose_knot_spacing(t, P, R, w=None, rotation_order="auto", position_order="auto",
                         rotation_dt=None, position_dt=None, max_turn_rad=MAX_CONTROL_TURN_RAD,
-                        estimated_rotation=False):
+                        estimated_rotation=False, grid_phase=True):
     """Choose order and knot spacing of rotation and position from the poses.
 
     Parameters
@@ -425,6 +428,10 @@ def choose_knot_spacing(t, P, R, w=None, rotation_order="auto", position_order="
     estimated_rotation : bool
         The rotation is an estimator's output that fused an IMU: its detail is motion to the
         top of the band (``as_motion`` of :func:`choose_signal`).
+    grid_phase : bool
+        Choose where the rotation's grid sits against the motion (step 6; ``knot_phase``, the
+        spacing before the first pose its grid starts). False: on the first pose, as an se3
+        spline's one grid of both parts does (12 fits fewer).
 
     Returns
     -------
@@ -437,7 +444,7 @@ def choose_knot_spacing(t, P, R, w=None, rotation_order="auto", position_order="
     po = ORDERS if position_order == "auto" else (int(position_order),)
     rot = choose_signal(t, rotation_increments(R, anchor_block(t)), w, 1, ro, rotation_dt,
                         max_rotation_spacing(t, R, max_turn_rad),
-                        increments=True, as_motion=estimated_rotation)
+                        increments=True, as_motion=estimated_rotation, grid_phase=grid_phase)
     rot["estimated"] = bool(estimated_rotation)
     pos = choose_signal(t, np.ascontiguousarray(P), w, 2, po, position_dt)
     # an orientation error dtheta (isotropic) turns the specific force f by f x dtheta: RMS
