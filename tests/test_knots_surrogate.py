@@ -63,6 +63,38 @@ def test_fast_len_is_the_least_5_smooth_length():
         assert sur.fast_len(n) == want, n
 
 
+def test_fast_len_below_is_the_greatest_11_smooth_length():
+    """The noise spectrum's FFT length: the greatest 2^a 3^b 5^c 7^d 11^e <= n (60 s at 200 Hz is
+    12001 = 11 x 1091 poses); such lengths leave out at most 2.6% of n from 1000 on."""
+    smooth = sorted({2**a * 3**b * 5**c * 7**d * 11**e for a in range(21) for b in range(13) for c in range(9)
+                     for d in range(8) for e in range(6)})
+    for n in list(range(1, 3000)) + [12001, 719999, 1_000_003]:
+        want = max(m for m in smooth if m <= n)
+        assert sur.fast_len_below(n) == want, n
+    assert sur.fast_len_below(0) == 1  # (a window of one pose)
+    worst = max(1.0 - 2 * sur.fast_len_below(n // 2) / n for n in range(1000, 60000, 7))
+    assert worst <= 0.026, worst
+
+
+def test_surrogate_covers_a_window_of_any_length():
+    """Read on the window's first 2 fast_len_below(n / 2) poses, the surrogate is drawn at that
+    length and continued periodically over the rest: every window gets a series of its own
+    length, white noise at its level (12001 and 12000 poses: the same spectrum, within 10%)."""
+    rng = np.random.default_rng(5)
+    levels = []
+    for n in (12001, 12000, 1847):
+        t = np.arange(n) / RATE_HZ
+        windows = crossval._windows(t, np.ascontiguousarray(1e-3 * rng.normal(size=(n, 3))), np.ones(n))
+        series = sur.noise_surrogates(windows, 4, 0.05)[0]
+        for wd, x in zip(windows, series):
+            m = 2 * sur.fast_len_below(wd.X.shape[0] // 2)
+            assert x.shape == wd.X.shape and m <= wd.X.shape[0]
+            np.testing.assert_array_equal(x[m:], x[: wd.X.shape[0] - m])
+        levels.append(np.sqrt(np.mean(series[0] ** 2)))
+    assert 0.7e-3 <= min(levels) and max(levels) <= 1.3e-3, levels
+    assert abs(levels[0] / levels[1] - 1.0) <= 0.1, levels
+
+
 def test_motion_limited_on_lengths_with_a_large_prime_factor():
     """The padded periodogram keeps the decisions: white noise is noise, a smooth low-rate
     signal is motion, at lengths whose FFT would be slow (5999 + 2 poses) and fast ones."""

@@ -40,10 +40,11 @@ def fast_len(n):
 
 @functools.lru_cache(maxsize=64)
 def fast_len_below(n):
-    """The greatest 2^a 3^b 5^c 7^d 11^e <= n (n >= 1), a length numpy's FFT has radices for.
+    """The greatest 2^a 3^b 5^c 7^d 11^e <= n (1 for n < 1), a length numpy's FFT has radices for.
     The noise spectrum is read from, and its surrogate drawn at, twice that of half a window's
     poses (12000 of 60 s at 200 Hz, 12001 = 11 x 1091: FFTs of that length took 12% of a fit's
-    time, 8x those of 12000); such lengths leave out at most 2.5% of the poses from 1000 on."""
+    time, 8x those of 12000); such lengths leave out at most 2.6% of the poses from 1000 on."""
+    n = max(int(n), 1)
     best = 1
     for p11 in _powers(11, n):
         for p7 in _powers(7, n // p11):
