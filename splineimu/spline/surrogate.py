@@ -186,7 +186,7 @@ def noise_surrogates(windows, k, dt_cv, seed=7, follow=True, also_flat=False, wh
     ``white`` (a test of the slope read): noise it passes whose spectrum is flat above twice the
     cut-off (:func:`_flat_above`) is white, drawn flat at the mean level of that band (the level
     at the cut-off holds motion the fit misses too), and its slope is returned as 0.
-    Returns ``(series, flat series or None, slope)``: with ``also_flat`` the same spectra and
+    Returns ``(series, flat series or None, slope, drawn flat as white)``: with ``also_flat`` the same spectra and
     phases continued flat; ``slope`` the median of the windows' slopes as read (NaN: none read),
     before the clip."""
     rngs = [np.random.default_rng(seed) for _ in windows]
@@ -218,7 +218,7 @@ def noise_surrogates(windows, k, dt_cv, seed=7, follow=True, also_flat=False, wh
 
     series = draw(slope)
     # (a flat draw with the same phases is the series itself where that is drawn flat already)
-    return series, (None if not also_flat else series if flat_white or slope == 0.0 else draw(0.0)), read
+    return series, (None if not also_flat else series if flat_white or slope == 0.0 else draw(0.0)), read, flat_white
 
 
 def noise_at_spacing(rms, dt_from, dt_to, r):
