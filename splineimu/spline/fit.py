@@ -448,8 +448,11 @@ def _rotation_bias(choice, rot, Rc_fit, max_iter, may_move=False):
     c["predicted_rms"] = choice["predicted_gyro_rms_rad_s"] = new
     if not may_move:
         return None
+    def at(r, spacing):  # whether candidate row r is the rung of order k at that spacing
+        return r["order"] == k and abs(np.log(r["knot_spacing_s"] / spacing)) < 0.05
+
     best, row = new, None
-    below = [r for r in c["candidates"] if r["order"] == k and abs(np.log(r["knot_spacing_s"] * _LADDER / dt)) < 0.05]
+    below = [r for r in c["candidates"] if at(r, dt / _LADDER)]
     if below and excess >= SO3_EXCESS_MOVE * pred**2:
         row_f = below[0]
         moved = float(np.sqrt(row_f["predicted_rms"] ** 2 + excess * (row_f["knot_spacing_s"] / dt) ** (2 * (k - 1))))
@@ -457,7 +460,7 @@ def _rotation_bias(choice, rot, Rc_fit, max_iter, may_move=False):
             best, row = moved, row_f
     if excess >= SO3_EXCESS_RIVALS * pred**2:
         rivals = sorted((r for r in c["candidates"] if r["predicted_rms"] <= pred * (1.0 + SO3_RIVAL_SHARE)
-                         and not (r["order"] == k and abs(np.log(r["knot_spacing_s"] / dt)) < 0.05)),
+                         and not at(r, dt)),
                         key=lambda r: r["predicted_rms"])[:SO3_RIVALS]
         for r in rivals:
             e = _so3_excess(rot, r["order"], r["knot_spacing_s"], None, max_iter)

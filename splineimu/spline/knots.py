@@ -319,18 +319,22 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
         # the residual is mostly motion the fit missed, not noise: look at finer spacings
         noises = [0.1 * nz for nz in noises]
     rows = []
-    best = None
-    cands = []
+    cands = []  # (predicted error, order, spacing, noise variance, end profiles, value-optimal spacing)
 
     def consider(k, dts, var, bias2, ends, dt_cv):
-        nonlocal best  # candidates (order k, spacings dts with their errors) into rows and best
+        # candidates (order k, spacings dts with their errors) into rows and cands
         pred = np.sqrt(var + bias2)
         for j, dt in enumerate(dts):
             rows.append({"order": k, "knot_spacing_s": float(dt), "predicted_rms": float(pred[j]),
                          "predicted_noise_rms": float(np.sqrt(var[j])), "cv_knot_spacing_s": float(dt_cv)})
             cands.append((float(pred[j]), k, float(dt), float(var[j]), ends[j], float(dt_cv)))
-            if best is None or pred[j] < best[0]:
-                best = cands[-1]
+
+    def least():  # the first candidate of the least predicted error (None: none)
+        best = None
+        for c in cands:
+            if best is None or c[0] < best[0]:
+                best = c
+        return best
 
     # the position's walk stops at WALK_MAX_S (its bias estimate lags) unless its value-optimal
     # spacing is beyond it; the rotation's goes on
@@ -359,6 +363,7 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
         if white_noise:  # (coloured noise's estimate holds the surrogate's misfit too)
             bias2 = _extrapolate_bias(ladder[1:], var, bias2, k - r)
         consider(k, ladder[1:], var, bias2, ends, dt_cv)
+    best = least()
     if best is None:
         raise SplineImuError("no knot spacing could be evaluated (too few poses for the orders?)")
     if dt_fixed is None and r == 2:
@@ -369,7 +374,8 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
         var, bias2, ends = _ladder_errors(windows, k, half, noises, r, bias_lag)
         inside = (half[1:] >= ladders[k][1] * 0.999) & (half[1:] <= ladders[k][-1] * 1.001)
         consider(k, half[1:][inside], var[inside], bias2[inside], [e for e, i in zip(ends, inside) if i], dt_cv)
-    if flat_white and white_noise and dt_fixed is None:  # of rungs that tie, the coarsest (FLAT_WHITE_BIAS_LAG)
+        best = least()
+    if flat_white and dt_fixed is None:  # of rungs that tie, the coarsest (FLAT_WHITE_BIAS_LAG)
         best = max((c for c in cands if c[1] == best[1] and c[0] <= best[0] * (1.0 + WHITE_TIE)), key=lambda c: c[2])
     if dt_fixed is None and r == 1 and (best[1], best[2]) in unread:
         best = _between_rungs(best, ladders[best[1]], rows, windows, noises, r, bias_lag)
