@@ -99,8 +99,10 @@ def test_euroc_mh04_jump_is_warned():
     a = np.loadtxt(path, delimiter=",", comments="#")
     t = (a[:, 0] - a[0, 0]) / 1e9
     spl, rep = fit(t, a[:, 1:4], a[:, [5, 6, 7, 4]], return_report=True)
-    codes = {w.code for w in rep.warnings}
-    assert "predicted_error_high" in codes, rep.summary()
+    # the predicted accel error: 0.68 m/s^2 at order 5, 74 ms (1.09 at order 4, 83 ms, warned as
+    # predicted_error_high, before every order's position ladder walked on past WALK_MAX_S where
+    # one order's value-optimal spacing lies beyond it)
+    assert 0.3 < rep.predicted_accel_rms_m_s2 < 3.0, rep.summary()
     local = [w for w in rep.warnings if w.t_start_s is not None and w.code in ("unexplained_jump", "residual_burst")]
     # the 10 cm jump of the Leica ground truth near 45 s is named with its time range
     assert any(w.t_start_s <= 45.1 and w.t_end_s >= 44.8 for w in local), [w.message for w in local]

@@ -60,8 +60,8 @@ Method
    and the error falls over the two rungs before it, the ladder is walked on past that end,
    toward coarser spacings (the rotation up to its turn limit, step 5; the position up to
    :data:`WALK_MAX_S`: the hand-held accelerometer's optimum is 2-3x the value-optimal
-   spacing, beyond the +-2 rungs); no position rung lies beyond it unless the value-optimal
-   spacing does (BROAD 11 position: the +2 rung, 56 ms, won on a
+   spacing, beyond the +-2 rungs); no position rung lies beyond it unless a value-optimal
+   spacing (of any order) does (BROAD 11 position: the +2 rung, 56 ms, won on a
    lagging bias estimate, accel lp10 1.035x scipy). The (order, spacing) with the smallest
    predicted error wins (for the position, after half a rung either side of it is tried too:
    near the steep bias rise of narrow-band motion the accelerometer's error changes by 20-30%
@@ -336,20 +336,22 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
                 best = c
         return best
 
-    # the position's walk stops at WALK_MAX_S (its bias estimate lags) unless its value-optimal
-    # spacing is beyond it; the rotation's goes on
-    walk_cap = WALK_MAX_S if r == 2 else np.inf
+    # the position's walk stops at WALK_MAX_S (its bias estimate lags) unless a value-optimal
+    # spacing (of any order: the flips scene, AR(1) noise, 30 s: order 4's 53 ms, order 6's 34 ms,
+    # order 6 held below the cap, order 4 at 104 ms chosen, accel 1.57x the best fixed setting,
+    # order 6 at 113 ms) is beyond it; the rotation's goes on
+    cv_spacings = [min((v, dt) for (kk, dt), v in table.items() if kk == k)[1] for k in orders]
+    walk_cap = WALK_MAX_S if r == 2 and max(cv_spacings) < WALK_MAX_S else np.inf
     ladders = {}
     unread = set()  # (order, spacing) of the rungs that read no bias (for _between_rungs)
-    for k in orders:
-        dt_cv = min((v, dt) for (kk, dt), v in table.items() if kk == k)[1]
+    for k, dt_cv in zip(orders, cv_spacings):
         steps = np.arange(-1, 1) if dt_fixed is not None else (np.arange(-4, 1) if limited else np.arange(-2, 3))
         ladder = dt_cv * _LADDER ** steps
         # motion-limited input is walked only toward finer spacings, and may go below the grid
         # (toward interpolation); the rung below the first one kept is its reference
         lo_k = lo * (0.5 if limited else 1.0)
         # no rung beyond the walk's cap either, unless the value-optimal spacing is beyond it
-        hi_k = min(hi, walk_cap) if dt_fixed is None and dt_cv < walk_cap else hi
+        hi_k = min(hi, walk_cap) if dt_fixed is None else hi
         ok = (ladder >= lo_k * 0.99) & (ladder <= hi_k * (1.0 + 1e-9))
         first = max(int(np.argmax(ok)) - 1, 0)
         ladder = np.r_[ladder[first], ladder[first + 1:][ok[first + 1:]]]
