@@ -867,6 +867,46 @@ def test_white_noise_ties_between_rungs_take_the_coarser():
     assert 1 / 3 <= rep.predicted_gyro_rms_rad_s / gyro_err(spl) <= 3
 
 
+#: Hand-held rotation (ZYX Euler angles as sums of sines, 0.2-1.9 Hz; benchmarks/heldout_motions.py,
+#: hand-held draw 2): (amplitude [rad], angular frequency [rad/s], phase) per angle.
+HAND_ANGLES = (((0.1295, 6.371, 4.6974), (0.1237, 6.5017, 3.4865), (0.1668, 3.4515, 5.2801)),
+               ((0.2127, 6.7009, 2.186), (0.2423, 6.1468, 1.7786), (0.4074, 1.1119, 5.1341)),
+               ((0.2185, 2.8015, 1.585), (0.0663, 12.0493, 0.1372), (0.6108, 1.7587, 0.1493)))
+
+
+def test_low_rate_noise_under_motion_moves_the_choice_coarser():
+    """Hand-held rotation at 20 Hz with 0.02 deg white noise: the top octave reads as motion, the
+    candidates' predictions carry a tenth of the noise surrogate, and 18 ms knots won (gyro 2.6x
+    the best fixed setting, predicted 0.0018 rad/s before the noise under the motion was added at
+    the choice). That noise (0.02 deg, read as 0.017) added to every candidate's prediction takes
+    108 ms: 1.02x."""
+    from splineimu.scenes.kinematics import euler_zyx_kinematics, sum_of_sines
+
+    def rotation(t):
+        cols = [sum_of_sines(t, table) for table in HAND_ANGLES]
+        return euler_zyx_kinematics(*(np.column_stack([c[i] for c in cols]) for i in range(3)))[:2]
+
+    t = np.arange(0.0, 60.0 + 1e-9, 0.05)
+    rng = np.random.default_rng(1)
+    R = rotation(t)[0] @ lie.so3_exp(np.radians(0.02) * rng.normal(size=(t.size, 3)))
+    p = 2e-4 * rng.normal(size=(t.size, 3))
+    q = lie.matrix_to_quat_xyzw(R)
+    te = np.arange(1.0, 59.0, 0.005)
+    w0 = rotation(te)[1]
+
+    def gyro_err(spl):
+        return float(np.sqrt(np.mean(np.sum((spl.angular_velocity_body(te) - w0) ** 2, axis=1))))
+
+    spl, rep = fit(t, p, q, return_report=True)
+    c = rep.knot_choice["rotation"]
+    best = min(gyro_err(fit(t, p, q, order=k, knot_spacing_s=dt, reject_outliers=False))
+               for k, dt in ((5, 0.113), (6, 0.08), (6, 0.113), (6, 0.16)))
+    assert c["motion_limited"] and c["moved_by_noise_under_motion_from_s"] < 0.05, c
+    assert 0.5 < c["noise_under_motion"] / np.radians(0.02) < 2.0, c["noise_under_motion"]
+    assert gyro_err(spl) < 1.15 * best, (gyro_err(spl), best)  # 1.02 (2.6 before)
+    assert 1 / 3 < c["predicted_rms"] / gyro_err(spl) < 3, (c["predicted_rms"], gyro_err(spl))
+
+
 def test_position_walks_on_where_any_order_is_value_optimal_beyond_the_limit():
     """Flips, AR(1) pose noise, 30 s (seed 4): order 4's value-optimal position spacing is 53 ms,
     order 6's 34 ms; order 6 stopped at the walk limit (WALK_MAX_S, 50 ms), order 4 walked on and
