@@ -1,21 +1,5 @@
-"""Checks of a fit: glitches to drop, steps and residual bursts to warn about, input refused.
-
-Outliers (tracking glitches) are told from fast valid motion by two tests that both must hold
-for a run of poses:
-
-1. their fit residuals stand out against the *local* residual level (a running median over
-   :data:`LOCAL_WINDOW_S`, so that a stretch of fast motion the spline follows less closely
-   raises its own yardstick), by :data:`OUTLIER_SIGMAS` and the absolute floors;
-2. the data jump *into* the run and *out of* it: the first pose of the run departs from the
-   linear extrapolation of the two poses before it, and the last from that of the two after,
-   by half the run's residual and by :data:`OUTLIER_SIGMAS` robust sigmas of such
-   extrapolation errors nearby (running median). Fast motion is smooth at the pose rate, a
-   glitch is not.
-
-A run that passes (1) and jumps in but not out (or out but not in) is a step (the tracking
-moved its origin): it cannot be dropped and is warned about with its time range, as is a run
-that passes (1) without any jump (motion faster than the spline follows there), once its
-residual reaches :data:`WARN_RESIDUAL_M` or :data:`WARN_RESIDUAL_RAD`.
+"""Checks of the input and of a fit other than its glitches (:mod:`.glitches`): input refused,
+stamps, resampled and held poses, residuals far above the noise.
 
 Stamps (:func:`stamp_warnings`): intervals far shorter than the median pose spacing in which the
 poses move as far as in a whole one (mocap logged with receive times, poses re-stamped on arrival)
@@ -36,18 +20,10 @@ import numpy as np
 from .. import lie
 from ..errors import InputError, SplineImuError
 from .basis import MAX_ORDER, MIN_ORDER
+from .glitches import MAX_GLITCH_S, _running_median, _runs
 from .report import WARN_ACCEL_M_S2, WARN_GYRO_RAD_S, FitWarning
 from .surrogate import band_power, motion_limited, noise_at_spacing
 
-OUTLIER_SIGMAS = 8.0
-OUTLIER_FLOOR_M = 2e-3
-OUTLIER_FLOOR_RAD = 2e-3
-LOCAL_WINDOW_S = 1.0
-#: Residual runs that are not dropped are warned about from this size on (m, rad).
-WARN_RESIDUAL_M = 5e-3
-WARN_RESIDUAL_RAD = np.radians(1.0)
-#: Runs of outliers longer than this are not glitches (steps, or motion not followed).
-MAX_GLITCH_S = 0.5
 #: Residual RMS above this many times the cross-validated pose noise (or, for a given spacing,
 #: the third-difference estimate) is warned about.
 RESIDUAL_OVER_NOISE = 3.0
@@ -345,164 +321,6 @@ def interpolated_poses(t, P, theta):
                     return m, between
             return None
     return None
-
-
-#: Window x samples up to which the running median runs in the kernel (a few ms); beyond, in
-#: scipy.ndimage (O(N log w)), whose import (0.04-0.2 s) is then small next to the fit.
-KERNEL_MEDIAN_MAX_WORK = 2e7
-
-
-def _running_median(x, width):
-    """scipy.ndimage ``median_filter(x, size, mode="mirror")`` with an odd ``size`` near ``width``.
-
-    The ends are mirrored, not extended with their first and last values: the spline follows
-    the end poses closely, and half a window of copies of the first residual set the local
-    level near the start (10 kHz poses, 1 s window: 0.37x the level elsewhere, and valid poses
-    8 sigmas above it were dropped as glitches)."""
-    size = max(int(width) | 1, 3)
-    x = np.ascontiguousarray(x, dtype=np.float64)
-    if x.size == 0:
-        return x.copy()
-    h = size // 2
-    xp = np.pad(x, h, mode="reflect")
-    if xp.size * size > KERNEL_MEDIAN_MAX_WORK:
-        from scipy.ndimage import median_filter
-
-        return median_filter(xp, size=size, mode="nearest")[h:h + x.size]
-    from .._kernels.median import running_median
-
-    out = np.empty_like(xp)
-    running_median(xp, size, out)
-    return out[h:h + x.size]
-
-
-def _extrapolation_errors(t, Y, norm=False):
-    """Y_i less its linear extrapolation from i-2, i-1 (forward) and from i+1, i+2 (backward),
-    (N, d) each, or with ``norm`` their lengths (N,); zero where the three poses span a gap (more
-    than 3 median spacings between two of them)."""
-    shape = (t.size,) if norm else Y.shape
-    fwd, bwd = np.zeros(shape), np.zeros(shape)
-    if t.size < 3:
-        return fwd, bwd
-    dt = np.diff(t)
-    ok = (np.maximum(dt[1:], dt[:-1]) <= 3.0 * np.median(dt))[:, None]  # poses i, i+1, i+2 close together
-
-    def error(x0, x1, x2, r):
-        v = np.where(ok, x0 - x1 - r[:, None] * (x1 - x2), 0.0)
-        return np.linalg.norm(v, axis=1) if norm else v
-
-    fwd[2:] = error(Y[2:], Y[1:-1], Y[:-2], dt[1:] / dt[:-1])
-    bwd[:-2] = error(Y[:-2], Y[1:-1], Y[2:], dt[:-1] / dt[1:])
-    return fwd, bwd
-
-
-def _inner_glitch(t, Y, e, fwd, bwd, jmin, a, b):
-    """(first, last) pose of a glitch inside the run [a, b) of large residuals ``e``, or None: a
-    jump in before the largest residual and a jump out after it (as large as half of it and as
-    the local jump level ``jmin``), by the same offset (the poses between moved together: their
-    forward and backward extrapolation errors agree within half their size)."""
-    top = float(e[a:b].max())
-    peak = a + int(np.argmax(e[a:b]))
-    ins = a + np.flatnonzero(fwd[a:peak + 1] > np.maximum(0.5 * top, jmin[a:peak + 1]))
-    outs = peak + np.flatnonzero(bwd[peak:b] > np.maximum(0.5 * top, jmin[peak:b]))
-    if not (ins.size and outs.size):
-        return None
-    i, k = int(ins[0]), int(outs[-1])
-    jump_in = _extrapolation_errors(t[i - 2:i + 1], Y[i - 2:i + 1])[0][2]  # the vectors of fwd[i], bwd[k]
-    jump_out = _extrapolation_errors(t[k:k + 3], Y[k:k + 3])[1][0]
-    if np.linalg.norm(jump_in - jump_out) > 0.5 * min(fwd[i], bwd[k]):
-        return None
-    return i, k
-
-
-def _runs(mask, bridge=2):
-    """(start, stop) index pairs of runs of True, joining runs separated by <= bridge Falses."""
-    idx = np.flatnonzero(mask)
-    if idx.size == 0:
-        return []
-    cut = np.flatnonzero(np.diff(idx) > bridge + 1)
-    starts = np.r_[idx[0], idx[cut + 1]]
-    stops = np.r_[idx[cut], idx[-1]] + 1
-    return list(zip(starts.tolist(), stops.tolist()))
-
-
-def classify_residuals(t, P, theta, res_pos, res_rot, w):
-    """Glitch poses to drop (bool (N,)) and warnings for steps and unexplained residual bursts."""
-    n = t.size
-    drop = np.zeros(n, dtype=bool)
-    warnings = []
-    if n < 10:
-        return drop, warnings
-    h = float(np.median(np.diff(t)))
-    width = LOCAL_WINDOW_S / h
-    cand = np.zeros(n, dtype=bool)
-    score = np.zeros(n)
-    parts = []
-    for res, Y, floor, warn in ((res_pos, P, OUTLIER_FLOOR_M, WARN_RESIDUAL_M),
-                                (res_rot, theta, OUTLIER_FLOOR_RAD, WARN_RESIDUAL_RAD)):
-        e = np.linalg.norm(res, axis=1)
-        sigma = _running_median(np.where(w > 0, e, np.median(e[w > 0])), width) / 1.538
-        c = (e > OUTLIER_SIGMAS * sigma) & (e > floor) & (w > 0)
-        cand |= c
-        score = np.maximum(score, e / np.maximum(OUTLIER_SIGMAS * sigma, floor))
-        fwd, bwd = _extrapolation_errors(t, Y, norm=True)
-        # jumps are judged against the local size of such extrapolation errors (fast motion has
-        # larger ones), by the same number of robust sigmas
-        jmin = np.maximum(OUTLIER_SIGMAS * _running_median(fwd, width) / 1.538, floor)
-        parts.append((Y, e, fwd, bwd, jmin, warn))
-    for a, b in _runs(cand):
-        t0, t1 = float(t[a]), float(t[b - 1])
-        jin = jout = inside = big = False
-        core = None  # (first, last) pose of a glitch whose jumps lie inside the run
-        for Y, e, fwd, bwd, jmin, warn in parts:
-            top = float(e[a:b].max())
-            jin |= a == 0 or bool(fwd[a] > max(0.5 * top, jmin[a]))
-            jout |= b == n or bool(bwd[b - 1] > max(0.5 * top, jmin[b - 1]))
-            inside |= bool(np.any(fwd[a:b + 1] > np.maximum(0.25 * top, jmin[a:b + 1])))
-            big |= top >= warn
-            if core is None and 0 < a and b < n and top >= warn:
-                core = _inner_glitch(t, Y, e, fwd, bwd, jmin, a, b)
-        if not (jin and jout) and core is not None:
-            # the fit spread a large glitch's residual onto valid neighbours (fast motion, short
-            # knots), which joined the run: drop the poses between the jumps only (below the
-            # warning level such runs on BROAD's mocap, 0.1-0.4 degrees, were as often motion)
-            (a, b), jin, jout = (core[0], core[1] + 1), True, True
-            t0, t1 = float(t[a]), float(t[b - 1])
-        if jin and jout and (t1 - t0) <= MAX_GLITCH_S and (b - a) < 0.5 * n:
-            drop[a:b] = cand[a:b] | (score[a:b] > 0.5)
-        elif not big:
-            continue
-        elif jin or jout or inside:
-            warnings.append(FitWarning(
-                "unexplained_jump", f"the poses jump between {t0:.3f} s and {t1:.3f} s and the fit cannot follow "
-                "(a step of the tracking?): the synthesized IMU is wrong there", t0, t1))
-        else:
-            warnings.append(FitWarning(
-                "residual_burst", f"between {t0:.3f} s and {t1:.3f} s the fit residuals are far above their level "
-                "elsewhere (motion faster than the chosen knot spacing follows)", t0, t1))
-    return drop & (w > 0), _merge(warnings)
-
-
-def _merge(warnings, max_listed=20):
-    """Keep at most max_listed warnings per code; say how many more there were."""
-    out, count = [], {}
-    for wn in warnings:
-        count[wn.code] = count.get(wn.code, 0) + 1
-        if count[wn.code] <= max_listed:
-            out.append(wn)
-    for code, c in count.items():
-        if c > max_listed:
-            out.append(FitWarning(code, f"{c - max_listed} more '{code}' warnings not listed"))
-    return out
-
-
-def dropped_warning(t, drop, what="a tracking glitch"):
-    """One warning per run of dropped poses."""
-    out = []
-    for a, b in _runs(drop, bridge=0):
-        where = f"1 pose at {t[a]:.3f} s" if b - a == 1 else f"{b - a} poses between {t[a]:.3f} s and {t[b - 1]:.3f} s"
-        out.append(FitWarning("outliers_dropped", f"{where} dropped as {what}", float(t[a]), float(t[b - 1])))
-    return _merge(out)
 
 
 def _diff_noise(X):

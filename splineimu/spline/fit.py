@@ -34,8 +34,6 @@ from .banded import DEFAULT_SMOOTHNESS, layout, shifted_layout
 from .checks import (
     check_rotation_steps,
     check_stamp_clusters,
-    classify_residuals,
-    dropped_warning,
     held_poses,
     input_warnings,
     interpolated_poses,
@@ -48,6 +46,7 @@ from .checks import (
 from .controls import _quat_wxyz
 from .core import KINDS, Spline
 from .crossval import MAX_CV_POSES, _windows
+from .glitches import classify_residuals, dropped_warning
 from .knots import choose_knot_spacing
 from .ladder import _LADDER
 from .problem import _Problem

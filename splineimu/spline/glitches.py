@@ -1,0 +1,276 @@
+"""Tracking glitches to drop, and steps and residual bursts to warn about, from a fit's residuals
+and the poses' own jumps.
+
+Outliers (tracking glitches) are told from fast valid motion by two tests that both must hold
+for a run of poses:
+
+1. their fit residuals stand out against the *local* residual level (a running median over
+   :data:`LOCAL_WINDOW_S`, so that a stretch of fast motion the spline follows less closely
+   raises its own yardstick), by :data:`OUTLIER_SIGMAS` and the absolute floors;
+2. the data jump *into* the run and *out of* it: the first pose of the run departs from the
+   linear extrapolation of the two poses before it, and the last from that of the two after,
+   by half the run's residual and by :data:`OUTLIER_SIGMAS` robust sigmas of such
+   extrapolation errors nearby (running median). Fast motion is smooth at the pose rate, a
+   glitch is not.
+
+A run that passes (1) and jumps in but not out (or out but not in) is a step (the tracking
+moved its origin): it cannot be dropped and is warned about with its time range, as is a run
+that passes (1) without any jump (motion faster than the spline follows there), once its
+residual reaches :data:`WARN_RESIDUAL_M` or :data:`WARN_RESIDUAL_RAD`.
+
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .report import FitWarning
+
+OUTLIER_SIGMAS = 8.0
+OUTLIER_FLOOR_M = 2e-3
+OUTLIER_FLOOR_RAD = 2e-3
+LOCAL_WINDOW_S = 1.0
+#: Residual runs that are not dropped are warned about from this size on (m, rad).
+WARN_RESIDUAL_M = 5e-3
+WARN_RESIDUAL_RAD = np.radians(1.0)
+#: Runs of outliers longer than this are not glitches (steps, or motion not followed).
+MAX_GLITCH_S = 0.5
+#: A glitch found in the poses' own steps (:func:`_jump_glitches`): both steps above this many
+#: robust sigmas of the steps nearby (and the warning size). Two matching steps, each with its
+#: neighbours' signature, are far stronger evidence than one residual: with 8 sigmas a 2 cm glitch
+#: of 200 ms under 1 mm white noise (steps of 8.9 sigmas) went unfound on 5 of 18 cases (accel
+#: elsewhere up to 22x the best fixed setting).
+STEP_SIGMAS = 6.0
+
+
+#: Window x samples up to which the running median runs in the kernel (a few ms); beyond, in
+#: scipy.ndimage (O(N log w)), whose import (0.04-0.2 s) is then small next to the fit.
+KERNEL_MEDIAN_MAX_WORK = 2e7
+
+
+def _running_median(x, width):
+    """scipy.ndimage ``median_filter(x, size, mode="mirror")`` with an odd ``size`` near ``width``.
+
+    The ends are mirrored, not extended with their first and last values: the spline follows
+    the end poses closely, and half a window of copies of the first residual set the local
+    level near the start (10 kHz poses, 1 s window: 0.37x the level elsewhere, and valid poses
+    8 sigmas above it were dropped as glitches)."""
+    size = max(int(width) | 1, 3)
+    x = np.ascontiguousarray(x, dtype=np.float64)
+    if x.size == 0:
+        return x.copy()
+    h = size // 2
+    xp = np.pad(x, h, mode="reflect")
+    if xp.size * size > KERNEL_MEDIAN_MAX_WORK:
+        from scipy.ndimage import median_filter
+
+        return median_filter(xp, size=size, mode="nearest")[h:h + x.size]
+    from .._kernels.median import running_median
+
+    out = np.empty_like(xp)
+    running_median(xp, size, out)
+    return out[h:h + x.size]
+
+
+def _extrapolation_errors(t, Y, norm=False):
+    """Y_i less its linear extrapolation from i-2, i-1 (forward) and from i+1, i+2 (backward),
+    (N, d) each, or with ``norm`` their lengths (N,); zero where the three poses span a gap (more
+    than 3 median spacings between two of them)."""
+    shape = (t.size,) if norm else Y.shape
+    fwd, bwd = np.zeros(shape), np.zeros(shape)
+    if t.size < 3:
+        return fwd, bwd
+    dt = np.diff(t)
+    ok = (np.maximum(dt[1:], dt[:-1]) <= 3.0 * np.median(dt))[:, None]  # poses i, i+1, i+2 close together
+
+    def error(x0, x1, x2, r):
+        v = np.where(ok, x0 - x1 - r[:, None] * (x1 - x2), 0.0)
+        return np.linalg.norm(v, axis=1) if norm else v
+
+    fwd[2:] = error(Y[2:], Y[1:-1], Y[:-2], dt[1:] / dt[:-1])
+    bwd[:-2] = error(Y[:-2], Y[1:-1], Y[2:], dt[:-1] / dt[1:])
+    return fwd, bwd
+
+
+def _inner_glitch(t, Y, e, fwd, bwd, jmin, a, b):
+    """(first, last) pose of a glitch inside the run [a, b) of large residuals ``e``, or None: a
+    jump in before the largest residual and a jump out after it (as large as half of it and as
+    the local jump level ``jmin``), by the same offset (the poses between moved together: their
+    forward and backward extrapolation errors agree within half their size)."""
+    top = float(e[a:b].max())
+    peak = a + int(np.argmax(e[a:b]))
+    ins = a + np.flatnonzero(fwd[a:peak + 1] > np.maximum(0.5 * top, jmin[a:peak + 1]))
+    outs = peak + np.flatnonzero(bwd[peak:b] > np.maximum(0.5 * top, jmin[peak:b]))
+    if not (ins.size and outs.size):
+        return None
+    i, k = int(ins[0]), int(outs[-1])
+    jump_in = _extrapolation_errors(t[i - 2:i + 1], Y[i - 2:i + 1])[0][2]  # the vectors of fwd[i], bwd[k]
+    jump_out = _extrapolation_errors(t[k:k + 3], Y[k:k + 3])[1][0]
+    if np.linalg.norm(jump_in - jump_out) > 0.5 * min(fwd[i], bwd[k]):
+        return None
+    return i, k
+
+
+def _steps(t, Y):
+    """(N, d) steps of the poses: the move from pose i - 1 to i less the mean of its neighbours'
+    moves (i - 2 to i - 1 and i to i + 1, as velocities times the interval); zero where the
+    poses span a gap (more than 3 median spacings between two of them) and at the ends. A jump
+    of the poses by d at pose i reads d there (its neighbours -d/2); smooth motion, however fast,
+    only its jerk (about half the third derivative times h^3), where the poses' extrapolation
+    errors read its acceleration (h^2 times it: BROAD 07's fast turns look like one-pose glitches
+    to those)."""
+    out = np.zeros(Y.shape)
+    if t.size < 4:
+        return out
+    dt = np.diff(t)
+    v = np.diff(Y, axis=0) / dt[:, None]  # v[j]: pose j to j + 1
+    i = np.arange(2, t.size - 1)
+    ok = np.maximum(np.maximum(dt[i - 2], dt[i - 1]), dt[i]) <= 3.0 * np.median(dt)
+    out[i] = np.where(ok[:, None], (Y[i] - Y[i - 1]) - dt[i - 1, None] * 0.5 * (v[i - 2] + v[i]), 0.0)
+    return out
+
+
+def _jump_glitches(t, parts, w):
+    """(start, stop) of glitches found in the poses with weight ``w`` > 0: a step by d and a step
+    by -d (within half their size) 4 poses or more and at most :data:`MAX_GLITCH_S` apart, each above
+    :data:`STEP_SIGMAS` robust sigmas of the steps nearby and the warning size, with its
+    neighbours' steps near -d/2 (:func:`_steps`), and the other steps from 5 poses before to 5
+    after under 0.7 of them. Every pose between is dropped (they moved together).
+
+    A glitch long against the knots escapes the residual runs: 5 cm for 200 ms was partly
+    followed (circle scene: position knots 129 ms, its residual two runs, each warned as a
+    step, accel elsewhere 73x the best fixed setting) or smeared over 0.6 s by knots as long as
+    itself, above the local residual level nowhere (ellipse, AR(1) noise: nothing told, 2x)."""
+    out = []
+    used = np.flatnonzero(w > 0)  # (poses left out, e.g. resampled ones between the data, are not read)
+    t = t[used]
+    if t.size < 4:
+        return []
+    width = LOCAL_WINDOW_S / float(np.median(np.diff(t)))
+    for Y, _, _, _, _, warn in parts:
+        J = _steps(t, Y[used])
+        size = np.linalg.norm(J, axis=1)
+        level = np.maximum(STEP_SIGMAS * _running_median(size, width) / 1.538, warn)
+        # a step's neighbours read about minus half of it (a glitch of 3 poses or more; shorter
+        # ones are the residual runs'): not so the kinks of poses resampled by interpolation
+        half = np.zeros(size.size, dtype=bool)
+        half[1:-1] = ((np.linalg.norm(J[:-2] + 0.5 * J[1:-1], axis=1) <= 0.5 * size[1:-1])
+                      & (np.linalg.norm(J[2:] + 0.5 * J[1:-1], axis=1) <= 0.5 * size[1:-1]))
+        idx = np.flatnonzero((size > level) & half)
+        last = -1
+        for i in idx.tolist():
+            if i <= last:
+                continue
+            for m in idx[(idx >= i + 4) & (t[idx] - t[i] <= MAX_GLITCH_S)].tolist():
+                # (4 poses or more, whose steps inside are the motion's, not a step's neighbours')
+                # the two steps stand out: every other step from 5 poses before to 5 after (but
+                # their neighbours') is under 0.7 of them (motion at a low pose rate can step as
+                # much all around: OpenVINS' udel_gore at 20 Hz, 3 deg, alternating at 10 Hz)
+                near = np.r_[max(i - 5, 0):i - 1, i + 2:m - 1, m + 2:min(m + 6, size.size)]
+                small = near.size == 0 or size[near].max() <= 0.7 * min(size[i], size[m])
+                if small and np.linalg.norm(J[i] + J[m]) <= 0.5 * min(size[i], size[m]):
+                    out.append((int(used[i]), int(used[m])))
+                    last = m
+                    break
+    merged = []
+    for a, b in sorted(out):  # found in both the positions and the rotations: one glitch
+        if merged and a < merged[-1][1]:
+            merged[-1] = (merged[-1][0], max(b, merged[-1][1]))
+        else:
+            merged.append((a, b))
+    return merged
+
+
+def _runs(mask, bridge=2):
+    """(start, stop) index pairs of runs of True, joining runs separated by <= bridge Falses."""
+    idx = np.flatnonzero(mask)
+    if idx.size == 0:
+        return []
+    cut = np.flatnonzero(np.diff(idx) > bridge + 1)
+    starts = np.r_[idx[0], idx[cut + 1]]
+    stops = np.r_[idx[cut], idx[-1]] + 1
+    return list(zip(starts.tolist(), stops.tolist()))
+
+
+def classify_residuals(t, P, theta, res_pos, res_rot, w):
+    """Glitch poses to drop (bool (N,)) and warnings for steps and unexplained residual bursts."""
+    n = t.size
+    drop = np.zeros(n, dtype=bool)
+    warnings = []
+    if n < 10:
+        return drop, warnings
+    h = float(np.median(np.diff(t)))
+    width = LOCAL_WINDOW_S / h
+    cand = np.zeros(n, dtype=bool)
+    score = np.zeros(n)
+    parts = []
+    for res, Y, floor, warn in ((res_pos, P, OUTLIER_FLOOR_M, WARN_RESIDUAL_M),
+                                (res_rot, theta, OUTLIER_FLOOR_RAD, WARN_RESIDUAL_RAD)):
+        e = np.linalg.norm(res, axis=1)
+        sigma = _running_median(np.where(w > 0, e, np.median(e[w > 0])), width) / 1.538
+        c = (e > OUTLIER_SIGMAS * sigma) & (e > floor) & (w > 0)
+        cand |= c
+        score = np.maximum(score, e / np.maximum(OUTLIER_SIGMAS * sigma, floor))
+        fwd, bwd = _extrapolation_errors(t, Y, norm=True)
+        # jumps are judged against the local size of such extrapolation errors (fast motion has
+        # larger ones), by the same number of robust sigmas
+        jmin = np.maximum(OUTLIER_SIGMAS * _running_median(fwd, width) / 1.538, floor)
+        parts.append((Y, e, fwd, bwd, jmin, warn))
+    jumped = _jump_glitches(t, parts, w)
+    for a, b in jumped:
+        drop[a:b] = True
+    for a, b in _runs(cand):
+        if any(a < b0 and a0 < b for a0, b0 in jumped):  # the residual of a glitch found above
+            continue
+        t0, t1 = float(t[a]), float(t[b - 1])
+        jin = jout = inside = big = False
+        core = None  # (first, last) pose of a glitch whose jumps lie inside the run
+        for Y, e, fwd, bwd, jmin, warn in parts:
+            top = float(e[a:b].max())
+            jin |= a == 0 or bool(fwd[a] > max(0.5 * top, jmin[a]))
+            jout |= b == n or bool(bwd[b - 1] > max(0.5 * top, jmin[b - 1]))
+            inside |= bool(np.any(fwd[a:b + 1] > np.maximum(0.25 * top, jmin[a:b + 1])))
+            big |= top >= warn
+            if core is None and 0 < a and b < n and top >= warn:
+                core = _inner_glitch(t, Y, e, fwd, bwd, jmin, a, b)
+        if not (jin and jout) and core is not None:
+            # the fit spread a large glitch's residual onto valid neighbours (fast motion, short
+            # knots), which joined the run: drop the poses between the jumps only (below the
+            # warning level such runs on BROAD's mocap, 0.1-0.4 degrees, were as often motion)
+            (a, b), jin, jout = (core[0], core[1] + 1), True, True
+            t0, t1 = float(t[a]), float(t[b - 1])
+        if jin and jout and (t1 - t0) <= MAX_GLITCH_S and (b - a) < 0.5 * n:
+            drop[a:b] = cand[a:b] | (score[a:b] > 0.5)
+        elif not big:
+            continue
+        elif jin or jout or inside:
+            warnings.append(FitWarning(
+                "unexplained_jump", f"the poses jump between {t0:.3f} s and {t1:.3f} s and the fit cannot follow "
+                "(a step of the tracking?): the synthesized IMU is wrong there", t0, t1))
+        else:
+            warnings.append(FitWarning(
+                "residual_burst", f"between {t0:.3f} s and {t1:.3f} s the fit residuals are far above their level "
+                "elsewhere (motion faster than the chosen knot spacing follows)", t0, t1))
+    return drop & (w > 0), _merge(warnings)
+
+
+def _merge(warnings, max_listed=20):
+    """Keep at most max_listed warnings per code; say how many more there were."""
+    out, count = [], {}
+    for wn in warnings:
+        count[wn.code] = count.get(wn.code, 0) + 1
+        if count[wn.code] <= max_listed:
+            out.append(wn)
+    for code, c in count.items():
+        if c > max_listed:
+            out.append(FitWarning(code, f"{c - max_listed} more '{code}' warnings not listed"))
+    return out
+
+
+def dropped_warning(t, drop, what="a tracking glitch"):
+    """One warning per run of dropped poses."""
+    out = []
+    for a, b in _runs(drop, bridge=0):
+        where = f"1 pose at {t[a]:.3f} s" if b - a == 1 else f"{b - a} poses between {t[a]:.3f} s and {t[b - 1]:.3f} s"
+        out.append(FitWarning("outliers_dropped", f"{where} dropped as {what}", float(t[a]), float(t[b - 1])))
+    return _merge(out)
