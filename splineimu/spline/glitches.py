@@ -123,11 +123,27 @@ def _steps(t, Y):
     if t.size < 4:
         return out
     dt = np.diff(t)
-    v = np.diff(Y, axis=0) / dt[:, None]  # v[j]: pose j to j + 1
-    i = np.arange(2, t.size - 1)
-    ok = np.maximum(np.maximum(dt[i - 2], dt[i - 1]), dt[i]) <= 3.0 * np.median(dt)
-    out[i] = np.where(ok[:, None], (Y[i] - Y[i - 1]) - dt[i - 1, None] * 0.5 * (v[i - 2] + v[i]), 0.0)
+    d = np.diff(Y, axis=0)  # d[j]: pose j to j + 1
+    v = d / dt[:, None]
+    step = out[2:-1]  # poses 2 .. N - 2 (in place: an hour of poses is 17 MB an array)
+    np.add(v[:-2], v[2:], out=step)
+    step *= (-0.5 * dt[1:-1])[:, None]
+    step += d[1:-1]
+    step[np.maximum(np.maximum(dt[:-2], dt[1:-1]), dt[2:]) > 3.0 * np.median(dt)] = 0.0
     return out
+
+
+def _local_median(x, width):
+    """The running median of ``x`` over about ``width`` samples, as the running median of medians
+    of blocks of width / 8 (a level to compare with, not a filter: an hour of poses at 200 Hz
+    in 30 ms, where :func:`_running_median` takes 0.3 s)."""
+    b = max(int(width) // 8, 1)
+    if b == 1 or x.size < 4 * b:
+        return _running_median(x, width)
+    nb = x.size // b
+    med = np.median(x[:nb * b].reshape(nb, b), axis=1)
+    out = np.repeat(_running_median(med, width / b), b)
+    return np.r_[out, np.full(x.size - out.size, out[-1])]
 
 
 def _jump_glitches(t, parts, w):
@@ -143,14 +159,17 @@ def _jump_glitches(t, parts, w):
     itself, above the local residual level nowhere (ellipse, AR(1) noise: nothing told, 2x)."""
     out = []
     used = np.flatnonzero(w > 0)  # (poses left out, e.g. resampled ones between the data, are not read)
-    t = t[used]
+    every = used.size == t.size
+    t = t if every else t[used]
     if t.size < 4:
         return []
     width = LOCAL_WINDOW_S / float(np.median(np.diff(t)))
     for Y, _, _, _, _, warn in parts:
-        J = _steps(t, Y[used])
-        size = np.linalg.norm(J, axis=1)
-        level = np.maximum(STEP_SIGMAS * _running_median(size, width) / 1.538, warn)
+        J = _steps(t, Y if every else Y[used])
+        size = np.sqrt(np.einsum("ij,ij->i", J, J))
+        if not np.any(size > warn):
+            continue
+        level = np.maximum(STEP_SIGMAS * _local_median(size, width) / 1.538, warn)
         # a step's neighbours read about minus half of it (a glitch of 3 poses or more; shorter
         # ones are the residual runs'): not so the kinks of poses resampled by interpolation
         half = np.zeros(size.size, dtype=bool)
