@@ -140,18 +140,19 @@ def main(argv=None):
                     help="pose noise: white, AR(1) 30 ms, drawn at half the rate and interpolated (upsampled), or "
                          "whole poses at half the rate with white noise, interpolated (interpolated)")
     ap.add_argument("--rate", type=float, default=200.0, help="pose rate [Hz] (default 200)")
+    ap.add_argument("--duration", type=float, default=60.0, help="seconds of poses (default 60)")
     ap.add_argument("--noise", nargs=2, type=float, default=[1e-3, 0.1], metavar=("M", "DEG"),
                     help="pose noise per axis: position [m] and angle [deg] (default 1e-3 0.1)")
     ap.add_argument("--cache", default=None,
                     help="folder keeping the fixed grid's errors between runs (they do not depend on the choice)")
     args = ap.parse_args(argv)
     keys = ["case", "gyro/best", "accel/best", "pred/meas gyro", "pred/meas accel", "rotation", "position", "warnings"]
-    print(f"{args.rate:g} Hz, {args.noise[0]:g} m / {args.noise[1]:g} deg pose noise, 60 s\n")
+    print(f"{args.rate:g} Hz, {args.noise[0]:g} m / {args.noise[1]:g} deg pose noise, {args.duration:g} s\n")
     print("| " + " | ".join(keys) + " |\n|" + " --- |" * len(keys))
     for motion in args.motions:
         for draw in args.draws:
             for kind in args.kinds:
-                row = case(motion, draw, kind, args.rate, *args.noise, cache=args.cache)
+                row = case(motion, draw, kind, args.rate, *args.noise, duration=args.duration, cache=args.cache)
                 print("| " + " | ".join(f"{row[k]:.3f}" if isinstance(row[k], float) else row[k] for k in keys) + " |",
                       flush=True)
 
