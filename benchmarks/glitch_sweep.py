@@ -28,7 +28,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from scene_sweep import DURATION_S, KINDS, SCENES, _seeds  # noqa: E402
+from scene_sweep import DURATION_S, _seeds, case_arguments  # noqa: E402
 
 BAR = 1.3
 
@@ -37,7 +37,7 @@ def case(args):
     """One row (dict): caught or not, auto / best fixed per quantity away from the glitch."""
     name, kind, seed, rate, size, length, cache = args
     os.environ.setdefault("NUMBA_NUM_THREADS", "1")
-    from fit_scenes import fixed_grid_errors, scene_poses
+    from fit_scenes import fixed_grid_errors, scene_errors, scene_poses
 
     from splineimu import fit, lie
 
@@ -55,11 +55,7 @@ def case(args):
     dropped = set(np.flatnonzero(inside).tolist()) <= set(rep.dropped_poses)
     warned = sorted({w.code for w in rep.warnings
                      if w.t_start_s is not None and w.t_start_s <= t0 + length and w.t_end_s >= t0 - 1.0 / rate})
-    te = np.arange(1.0, DURATION_S - 1.0, 0.005)
-    te = te[np.abs(te - t0 - 0.5 * length) > 0.5]
-    (g0, f0), (g, f) = sc.imu(te), spl.imu(te)
-    ge = float(np.sqrt(np.mean(np.sum((g - g0) ** 2, axis=1))))
-    fe = float(np.sqrt(np.mean(np.sum((f - f0) ** 2, axis=1))))
+    ge, fe = scene_errors(sc, spl, DURATION_S, exclude=(t0 + 0.5 * length, 0.5))
     return {"scene": name, "kind": kind, "seed": seed, "t_s": t0, "caught": dropped or bool(warned),
             "dropped": len(rep.dropped_poses), "warned": ",".join(warned) or "-",
             "gyro": ge / grid[:, 0].min(), "accel": fe / grid[:, 1].min()}
@@ -67,10 +63,7 @@ def case(args):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--scenes", nargs="+", default=list(SCENES), choices=SCENES)
-    ap.add_argument("--kinds", nargs="+", default=list(KINDS), choices=KINDS)
-    ap.add_argument("--seeds", default="0-2", help="noise and glitch seeds, e.g. 0-9 (default 0-2)")
-    ap.add_argument("--rate", type=float, default=200.0, help="pose rate [Hz] (default 200)")
+    case_arguments(ap, seeds="noise and glitch seeds")
     ap.add_argument("--size", type=float, default=0.05, help="glitch size [m] (default 0.05)")
     ap.add_argument("--length", type=float, default=0.04, help="glitch length [s] (default 0.04)")
     ap.add_argument("--jobs", type=int, default=1, help="worker processes (default 1)")

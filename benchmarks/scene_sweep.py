@@ -76,12 +76,17 @@ def _seeds(text):
     return out
 
 
-def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+def case_arguments(ap, seeds="noise seeds"):
+    """The options that pick the cases (scenes, noise kinds, seeds, pose rate); glitch_sweep.py's too."""
     ap.add_argument("--scenes", nargs="+", default=list(SCENES), choices=SCENES)
     ap.add_argument("--kinds", nargs="+", default=list(KINDS), choices=KINDS)
-    ap.add_argument("--seeds", default="0-2", help="noise seeds, e.g. 0-9 or 0,3,5 (default 0-2)")
+    ap.add_argument("--seeds", default="0-2", help=f"{seeds}, e.g. 0-9 or 0,3,5 (default 0-2)")
     ap.add_argument("--rate", type=float, default=200.0, help="pose rate [Hz] (default 200)")
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    case_arguments(ap)
     ap.add_argument("--scale", type=float, default=1.0, help="pose noise in units of 1 mm / 0.1 deg (default 1)")
     ap.add_argument("--duration", type=float, default=DURATION_S, help="seconds of poses (default 60)")
     ap.add_argument("--jobs", type=int, default=1, help="worker processes (default 1)")

@@ -86,10 +86,13 @@ def imu_errors(spl, duration_s, margin=1.0, exclude=None):
 FIXED_GRID = tuple((k, float(dt)) for k in (4, 5, 6) for dt in np.geomspace(0.005, 2.56, 19))
 
 
-def scene_errors(sc, spl, duration_s, margin=1.0):
+def scene_errors(sc, spl, duration_s, margin=1.0, exclude=None):
     """RMS gyro [rad/s] and specific-force [m/s^2] errors of ``spl`` against scene ``sc`` on
-    [margin, duration - margin] at 200 Hz."""
+    [margin, duration - margin] at 200 Hz, optionally without the samples within ``exclude = (t,
+    half_width)``."""
     te = np.arange(margin, duration_s - margin, 0.005)
+    if exclude is not None:
+        te = te[np.abs(te - exclude[0]) > exclude[1]]
     (g0, f0), (g, f) = sc.imu(te), spl.imu(te)
     return (float(np.sqrt(np.mean(np.sum((g - g0) ** 2, axis=1)))),
             float(np.sqrt(np.mean(np.sum((f - f0) ** 2, axis=1)))))

@@ -176,7 +176,7 @@ def _plateau(t, Y, i, m, J, warn):
 
 
 def _jump_glitches(t, parts, w):
-    """(start, stop) of glitches found in the poses with weight ``w`` > 0: a step by d and a step
+    """The poses (bool (N,)) of glitches found in the poses with weight ``w`` > 0: a step by d and a step
     by -d (within half their size) 4 poses or more and at most :data:`MAX_GLITCH_S` apart, each above
     :data:`STEP_SIGMAS` robust sigmas of the steps nearby and the warning size, with its
     neighbours' steps near -d/2 (:func:`_steps`), and the other steps from 5 poses before to 5
@@ -188,15 +188,16 @@ def _jump_glitches(t, parts, w):
     followed (circle scene: position knots 129 ms, its residual two runs, each warned as a
     step, accel elsewhere 73x the best fixed setting) or smeared over 0.6 s by knots as long as
     itself, above the local residual level nowhere (ellipse, AR(1) noise: nothing told, 2x)."""
-    out = []
+    out = np.zeros(t.size, dtype=bool)
     used = np.flatnonzero(w > 0)  # (poses left out, e.g. resampled ones between the data, are not read)
     every = used.size == t.size
     t = t if every else t[used]
     if t.size < 4:
-        return []
+        return out
     width = LOCAL_WINDOW_S / float(np.median(np.diff(t)))
     for Y, _, _, _, _, warn in parts:
-        J = _steps(t, Y if every else Y[used])
+        Yu = Y if every else Y[used]
+        J = _steps(t, Yu)
         size = np.sqrt(np.einsum("ij,ij->i", J, J))
         if not np.any(size > warn):
             continue
@@ -209,7 +210,6 @@ def _jump_glitches(t, parts, w):
                       & (np.linalg.norm(J[2:] + 0.5 * J[1:-1], axis=1) <= 0.5 * size[1:-1]))
         idx = np.flatnonzero((size > np.maximum(PLATEAU_SIGMAS * sigma, warn)) & half)
         strong = size > level
-        Yu = Y if every else Y[used]
         # every pair of such steps 4 poses or more and at most MAX_GLITCH_S apart, in order, and
         # of those the ones whose steps are opposite (within half): at once (an hour of noisy
         # poses has thousands of such steps)
@@ -228,7 +228,7 @@ def _jump_glitches(t, parts, w):
                 # weaker steps: the poses between must sit off the motion around them by one
                 # offset (a long glitch under white noise: 1-1.5 cm for 200 ms under 1 mm)
                 if m - i >= 8 and _plateau(t, Yu, i, m, J, warn):
-                    out.append((int(used[i]), int(used[m])))
+                    out[used[i]:used[m]] = True
                     last = m
                 continue
             # (4 poses or more, whose steps inside are the motion's, not a step's neighbours')
@@ -237,15 +237,9 @@ def _jump_glitches(t, parts, w):
             # much all around: OpenVINS' udel_gore at 20 Hz, 3 deg, alternating at 10 Hz)
             near = np.r_[max(i - 5, 0):i - 1, i + 2:m - 1, m + 2:min(m + 6, size.size)]
             if near.size == 0 or size[near].max() <= 0.7 * min(size[i], size[m]):
-                out.append((int(used[i]), int(used[m])))
+                out[used[i]:used[m]] = True
                 last = m
-    merged = []
-    for a, b in sorted(out):  # found in both the positions and the rotations: one glitch
-        if merged and a < merged[-1][1]:
-            merged[-1] = (merged[-1][0], max(b, merged[-1][1]))
-        else:
-            merged.append((a, b))
-    return merged
+    return out
 
 
 def _runs(mask, bridge=2):
@@ -284,10 +278,9 @@ def classify_residuals(t, P, theta, res_pos, res_rot, w):
         jmin = np.maximum(OUTLIER_SIGMAS * _running_median(fwd, width) / 1.538, floor)
         parts.append((Y, e, fwd, bwd, jmin, warn))
     jumped = _jump_glitches(t, parts, w)
-    for a, b in jumped:
-        drop[a:b] = True
+    drop |= jumped
     for a, b in _runs(cand):
-        if any(a < b0 and a0 < b for a0, b0 in jumped):  # the residual of a glitch found above
+        if jumped[a:b].any():  # the residual of a glitch found above
             continue
         t0, t1 = float(t[a]), float(t[b - 1])
         jin = jout = inside = big = False

@@ -424,6 +424,7 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
     mixed = limited or (dt_fixed is None and best[2] < h and noisy())
     reading = under_motion(best[1], best[5]) if mixed else None
     moved_from = None
+    unit_vars = {}  # (order, spacing): unit white noise's derivative error (the re-ranking's)
     if reading is not None and reading[1] > 0 and dt_fixed is None and r == 1 and not estimate:
         # that noise was left out of the candidates' predictions (a tenth of the surrogate): with
         # it added to each, the least is taken again (hand-held motion at 20 Hz, 0.2 mm / 0.02
@@ -435,12 +436,11 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
         # leaks into it, and a lower order at the same spacing follows that motion worse; fast
         # hand-held at 20 Hz, k5 -> k4 at 18 ms, gyro 1.71 -> 1.96x the best fixed setting)
         every = [best] + [c for c in cands if c[2] > best[2] * (1.0 + 1e-6)]
-        extra = {}
         for kk in sorted({c[1] for c in every}):
             dts = np.array(sorted({c[2] for c in every if c[1] == kk}))
-            extra.update({(kk, d): float(v) for d, v in zip(dts.tolist(), unit_var(kk, dts))})
+            unit_vars.update({(kk, d): float(v) for d, v in zip(dts.tolist(), unit_var(kk, dts))})
         sig2 = reading[1] ** 2
-        least_mixed = min(every, key=lambda c: c[0] ** 2 + extra[(c[1], c[2])] * sig2)
+        least_mixed = min(every, key=lambda c: c[0] ** 2 + unit_vars[(c[1], c[2])] * sig2)
         if (least_mixed[1], least_mixed[2]) != (best[1], best[2]):
             moved_from = best[2]
             if (least_mixed[1], least_mixed[5]) != (best[1], best[5]):  # its own held-out errors
@@ -481,7 +481,7 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
         # the error at the choice were the held-out error white noise (an upper bound where noise
         # and motion mix), and the noise under the motion's error added to the prediction; the
         # fits are linear: a noise of standard deviation s gives s^2 times unit noise's error
-        vu = unit_var(k, np.array([dt]))[0]
+        vu = unit_vars[(k, dt)] if (k, dt) in unit_vars else unit_var(k, np.array([dt]))[0]
         out["predicted_rms_if_noise"] = float(np.sqrt(vu * held[0] / 3.0))
         for key in ("predicted_rms", "end_predicted_rms", "predicted_noise_rms"):
             out[key] = float(np.sqrt(out[key] ** 2 + vu * sigma**2))
