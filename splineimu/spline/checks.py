@@ -6,6 +6,10 @@ poses move as far as in a whole one (mocap logged with receive times, poses re-s
 mean the stamps are jittered, not the motion; the fit can only read such input as noise or
 jumps, so it is warned about with the share of such intervals and their time range.
 
+Stretches of motion the knots do not follow (:func:`burst_warnings`): a window of the residual
+whose spectrum stands far above its usual level at frequencies well below the Nyquist frequency
+(a landing, a knock), with the IMU error that motion makes there where it is large.
+
 Two checks of the whole input (:func:`input_warnings`): fit residuals far above the pose noise
 (the automatic choice's cross-validated level, or, for a given spacing, a robust estimate from
 third differences, which reads coloured noise low and so gets a wider margin), and input whose
@@ -22,7 +26,7 @@ from ..errors import InputError, SplineImuError
 from .basis import MAX_ORDER, MIN_ORDER
 from .glitches import MAX_GLITCH_S, _running_median, _runs
 from .report import WARN_ACCEL_M_S2, WARN_GYRO_RAD_S, FitWarning
-from .surrogate import band_power, motion_limited, noise_at_spacing
+from .surrogate import band_power, motion_limited, noise_at_spacing, residual_bursts
 
 #: Residual RMS above this many times the cross-validated pose noise (or, for a given spacing,
 #: the third-difference estimate) is warned about.
@@ -385,6 +389,43 @@ def input_warnings(t, P, theta, res_pos, res_rot, keep, choice=None, spacings=No
                               f"{nyq:.3g} Hz is not in the input, so the synthesized IMU lacks it, and the motion "
                               "between poses is interpolated: the predicted errors include neither (exact fast "
                               "hand-held poses at 20 Hz: predicted gyro error 0.25x the measured)"))
+    return out
+
+
+#: Warnings whose time range already tells of a local problem (a burst there is not told again).
+_LOCAL_CODES = ("unexplained_jump", "residual_burst", "outliers_dropped")
+
+
+def burst_warnings(t, res_pos, res_rot, keep, choice, spacings, told=()):
+    """``motion_not_followed`` where a stretch of the residual holds motion the knots miss
+    (:func:`.surrogate.residual_bursts`) whose IMU error there is above the warning level and
+    3x the predicted error elsewhere; consecutive windows are told as one range, and not where
+    a warning in ``told`` covers part of it already."""
+    out = []
+    ranges = [(w.t_start_s, w.t_end_s) for w in told if w.code in _LOCAL_CODES and w.t_start_s is not None]
+    for key, res, r, imu, unit, lim, pred_key in (
+            ("position", res_pos, 2, "accel", "m/s^2", WARN_ACCEL_M_S2, "predicted_accel_rms_m_s2"),
+            ("rotation", res_rot, 1, "gyro", "rad/s", WARN_GYRO_RAD_S, "predicted_gyro_rms_rad_s")):
+        pred = choice[pred_key] if choice is not None else None
+        level = max(lim, 3.0 * pred) if pred is not None else lim
+        found = [b for b in residual_bursts(t, res, keep, r) if b[2] > level]
+        runs = []
+        for b in found:  # windows overlapping the one before join its range
+            if runs and b[0] <= runs[-1][-1][1]:
+                runs[-1].append(b)
+            else:
+                runs.append([b])
+        for run in runs:
+            t0, t1 = run[0][0], run[-1][1]
+            if any(a <= t1 and t0 <= z for a, z in ranges):
+                continue
+            _, _, rms, f, ratio = max(run, key=lambda b: b[2])
+            elsewhere = f" (predicted ~{pred:.3g} elsewhere)" if pred is not None else ""
+            out.append(FitWarning(
+                "motion_not_followed", f"between {t0:.3f} s and {t1:.3f} s the {key} poses move at ~{f:.3g} Hz "
+                f"beyond what the {1e3 * spacings[key]:.4g} ms {key} knots follow ({ratio:.0f}x the residual's usual "
+                f"power there): the synthesized {imu} there is off by ~{rms:.3g} {unit}{elsewhere}; a finer "
+                f"{key} knot spacing follows it (unless it is a burst of pose noise)", t0, t1))
     return out
 
 

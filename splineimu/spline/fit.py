@@ -32,6 +32,7 @@ from .._kernels import gauss_newton as _gn
 from ..errors import InputError, SplineImuError
 from .banded import DEFAULT_SMOOTHNESS, layout, shifted_layout
 from .checks import (
+    burst_warnings,
     check_rotation_steps,
     check_stamp_clusters,
     held_poses,
@@ -393,6 +394,7 @@ def fit(t_s, positions=None, quat_xyzw=None, kind="split", order="auto", knot_sp
     warnings = (prediction_warnings(choice, t) + early_warnings + gap_warnings + warnings
                 + input_warnings(t[on], P[on], theta[on], res_pos[on], res_rot[on], keep[on], choice, spacings))
     warnings += _lines_warning(t[on], res_rot[on], keep[on], lay_r[1], choice)
+    warnings += burst_warnings(t[on], res_pos[on], res_rot[on], keep[on], choice, spacings, warnings)
     if p_order < 3:  # the CLI refuses it; here a spline for poses alone may be what is wanted
         warnings.append(FitWarning("order_too_low", f"position order {p_order} is piecewise linear: no acceleration "
                                    "between knots, so the accelerometer reads gravity alone; use order 3 or more"))
