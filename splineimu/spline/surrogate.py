@@ -1,6 +1,8 @@
 """The pose noise as the knot choice sees it (:mod:`splineimu.spline.knots`, steps 2 and 4):
 whether the top of the band holds motion or noise, the noise spectrum read from a fit's
-residual, and noise series drawn with that spectrum to propagate through fits."""
+residual, and noise series drawn with that spectrum to propagate through fits; and, from the
+final fit's residual, the motion it left out: periodic (:func:`residual_lines`) or in bursts
+(:func:`residual_bursts`)."""
 
 from __future__ import annotations
 
