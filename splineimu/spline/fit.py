@@ -47,7 +47,7 @@ from .checks import (
 from .controls import _quat_wxyz
 from .core import KINDS, Spline
 from .crossval import MAX_CV_POSES, _windows
-from .glitches import classify_residuals, dropped_warning
+from .glitches import WARN_RESIDUAL_M, classify_residuals, dropped_warning, without_steps
 from .knots import choose_knot_spacing
 from .ladder import _LADDER
 from .problem import _Problem
@@ -263,6 +263,9 @@ def fit(t_s, positions=None, quat_xyzw=None, kind="split", order="auto", knot_sp
         check_stamp_clusters(t)
     source = "auto" if isinstance(knot_spacing_s, str) else "given"
 
+    # the choice reads the positions without the steps of their tracking (the fit follows them)
+    P_chosen = without_steps(t, P, w, WARN_RESIDUAL_M) if "auto" in given else P
+
     def settings(wts, turn=MAX_CONTROL_TURN_RAD):
         """The knot choice (None if all is given), the (order, layout) of rotation and position,
         and the noise levels that weigh them."""
@@ -272,7 +275,7 @@ def fit(t_s, positions=None, quat_xyzw=None, kind="split", order="auto", knot_sp
             on = chosen_on
             # (a split spline's rotation grid may start before the first pose: .phase; an se3
             # spline's one grid starts on it)
-            ch = choose_knot_spacing(t[on], P[on], R[on], wts[on], ro, po, None if rdt == "auto" else rdt,
+            ch = choose_knot_spacing(t[on], P_chosen[on], R[on], wts[on], ro, po, None if rdt == "auto" else rdt,
                                      None if pdt == "auto" else pdt, turn, estimated_rotation, kind == "split")
             ro, rdt = ch["rotation"]["order"], ch["rotation"]["knot_spacing_s"]
             po, pdt = ch["position"]["order"], ch["position"]["knot_spacing_s"]

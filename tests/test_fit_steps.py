@@ -1,0 +1,69 @@
+"""Steps of the tracking (the poses jump by a few cm and stay there) are told where they are and do
+not steer the knot choice of the whole input."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from splineimu import fit, lie
+from splineimu.spline.glitches import WARN_RESIDUAL_M, without_steps
+
+RATE_HZ = 200.0
+STEPS_S = (12.3, 21.7, 33.05, 41.9, 50.45)
+
+
+def _poses(steps_m, seed=2):
+    """60 s of a flight-like motion (an ellipse with a vertical wobble, turning) at 200 Hz with
+    0.2 mm / 0.02 deg white noise, the positions moved by ``steps_m[j]`` along a random
+    direction from STEPS_S[j] on."""
+    t = np.arange(0.0, 60.0, 1.0 / RATE_HZ)
+    p = np.stack([2.0 * np.cos(2 * np.pi * t / 12), 1.2 * np.sin(2 * np.pi * t / 12),
+                  1.0 + 0.2 * np.sin(2 * np.pi * t / 3.1) + 0.05 * np.sin(2 * np.pi * t / 0.9)], axis=1)
+    zero = np.zeros_like(t)
+    R = lie.so3_exp(np.stack([0.1 * np.sin(2 * np.pi * t / 2.3), zero, 2 * np.pi * t / 12], axis=1))
+    rng = np.random.default_rng(seed)
+    P = p + 2e-4 * rng.normal(size=p.shape)
+    for ts, size in zip(STEPS_S, steps_m):
+        d = rng.normal(size=3)
+        P[t >= ts] += size * d / np.linalg.norm(d)
+    Rn = R @ lie.so3_exp(np.radians(0.02) * rng.normal(size=p.shape))
+    return t, P, lie.matrix_to_quat_xyzw(Rn)
+
+
+@pytest.fixture(scope="module")
+def clean():
+    return fit(*_poses([0.0] * len(STEPS_S)), return_report=True)[1]
+
+
+def test_steps_are_told_and_leave_the_choice_alone(clean):
+    """Five steps of 3-8 cm: each told as a jump where it is, and the position knots within 10% of
+    those of the same poses without them (they went coarse before the steps were taken out of
+    what the choice reads)."""
+    _, rep = fit(*_poses([0.03, 0.08, 0.05, 0.04, 0.06]), return_report=True)
+    jumps = [(w.t_start_s, w.t_end_s) for w in rep.warnings if w.code == "unexplained_jump"]
+    for ts in STEPS_S:
+        assert any(a - 0.01 <= ts <= b + 0.01 for a, b in jumps), (ts, jumps)
+    assert rep.position_knot_spacing_s == pytest.approx(clean.position_knot_spacing_s, rel=0.1)
+    assert "unexplained_jump" not in {w.code for w in clean.warnings}
+
+
+def test_without_steps_takes_each_step_off_the_poses_after_it():
+    t, P, _ = _poses([0.05, 0.0, 0.0, 0.0, 0.0])
+    t0, P0, _ = _poses([0.0] * 5)
+    out = without_steps(t, P, np.ones(t.size), WARN_RESIDUAL_M)
+    # the step is taken off to within the noise of one step (the motion's jerk and the noise
+    # of the poses around it)
+    assert np.max(np.abs((out - out[0]) - (P0 - P0[0]))) < 2e-3
+    assert without_steps(t0, P0, np.ones(t0.size), WARN_RESIDUAL_M) is P0
+
+
+def test_a_glitch_and_back_is_not_a_step():
+    """A glitch (5 cm for 0.2 s, then back) is a pair of steps: dropped as before, not taken off."""
+    t, P, q = _poses([0.0] * 5)
+    P = P.copy()
+    P[(t >= 30.0) & (t < 30.2)] += np.array([0.05, 0.0, 0.0])
+    assert without_steps(t, P, np.ones(t.size), WARN_RESIDUAL_M) is P
+    _, rep = fit(t, P, q, return_report=True)
+    assert "outliers_dropped" in {w.code for w in rep.warnings}
+    assert "unexplained_jump" not in {w.code for w in rep.warnings}
