@@ -273,9 +273,9 @@ def without_steps(t, Y, w, warn):
     _, alone = _jump_glitches(t, [(Y, None, None, None, None, warn)], w)
     if not alone.any():
         return Y
-    J = _steps(t, Y)
+    used = np.flatnonzero(w > 0)  # (the steps as _jump_glitches reads them: between weighted poses)
     offsets = np.zeros(Y.shape)
-    offsets[alone] = J[alone]
+    offsets[used] = np.where(alone[used][:, None], _steps(t[used], Y[used]), 0.0)
     return Y - np.cumsum(offsets, axis=0)
 
 
@@ -341,9 +341,7 @@ def classify_residuals(t, P, theta, res_pos, res_rot, w):
         elif not big:
             continue
         elif jin or jout or inside:
-            warnings.append(FitWarning(
-                "unexplained_jump", f"the poses jump between {t0:.3f} s and {t1:.3f} s and the fit cannot follow "
-                "(a step of the tracking?): the synthesized IMU is wrong there", t0, t1))
+            warnings.append(_jump_warning(t0, t1))
         else:
             warnings.append(FitWarning(
                 "residual_burst", f"between {t0:.3f} s and {t1:.3f} s the fit residuals are far above their level "
@@ -351,12 +349,15 @@ def classify_residuals(t, P, theta, res_pos, res_rot, w):
     told = [(wn.t_start_s, wn.t_end_s) for wn in warnings]
     for i in np.flatnonzero(alone).tolist():
         t0, t1 = float(t[max(i - 1, 0)]), float(t[i])
-        if not any(a <= t1 and t0 <= b for a, b in told):
-            warnings.append(FitWarning(
-                "unexplained_jump", f"the poses jump between {t0:.3f} s and {t1:.3f} s and the fit cannot follow "
-                "(a step of the tracking?): the synthesized IMU is wrong there", t0, t1))
+        if not any(a <= t1 and t0 <= b for a, b in told):  # (a step the residual runs missed)
+            warnings.append(_jump_warning(t0, t1))
     warnings.sort(key=lambda wn: wn.t_start_s)
     return drop & (w > 0), _merge(warnings)
+
+
+def _jump_warning(t0, t1):
+    return FitWarning("unexplained_jump", f"the poses jump between {t0:.3f} s and {t1:.3f} s and the fit cannot "
+                      "follow (a step of the tracking?): the synthesized IMU is wrong there", t0, t1)
 
 
 def _merge(warnings, max_listed=20):
