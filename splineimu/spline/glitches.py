@@ -196,10 +196,10 @@ def _jump_glitches(t, parts, w):
     step, accel elsewhere 73x the best fixed setting) or smeared over 0.6 s by knots as long as
     itself, above the local residual level nowhere (ellipse, AR(1) noise: nothing told, 2x).
 
-    Also returns the poses (bool (N,)) where such a strong step stands alone, with no step back:
-    the tracking moved its origin (EuRoC MH_03's ground truth: 8 cm within 5 ms at 35.395 s). At
-    coarse knots the residual runs miss many: of 25 steps of 2-8 cm added to MH_01's ground truth,
-    15 (up to 7.6 cm) went untold at the 359 ms knots they led to."""
+    Also returns the poses (bool (N,)) where a step above :data:`LONE_STEP_SIGMAS` stands alone,
+    with no step back: the tracking moved its origin (EuRoC MH_03's ground truth: 8 cm within 5 ms
+    at 35.395 s; told here, as the residual runs miss many at coarse knots, and taken off what the
+    knot choice reads: :func:`without_steps`)."""
     out = np.zeros(t.size, dtype=bool)
     single = np.zeros(t.size, dtype=bool)
     used = np.flatnonzero(w > 0)  # (poses left out, e.g. resampled ones between the data, are not read)
@@ -268,8 +268,9 @@ def without_steps(t, Y, w, warn):
     follows the poses as they are, and tells the steps). A step is neither noise nor motion; read
     as either it coarsens the knots of all the input: EuRoC MH_01's ground truth with 25 steps of
     2-8 cm added got position knots of 359 ms for 42, its accel against its real IMU away from the
-    steps (10 Hz low-passed) 0.360 m/s^2 for 0.214; EuRoC MH_03's ground truth (steps of up to
-    8 cm) 258 ms. Y itself where there are none."""
+    steps (10 Hz low-passed) 0.360 m/s^2 for 0.214, and 15 of the steps (up to 7.6 cm) went untold
+    at those knots; EuRoC MH_03's ground truth (steps of up to 8 cm) 258 ms. Y itself where there
+    are none."""
     _, alone = _jump_glitches(t, [(Y, None, None, None, None, warn)], w)
     if not alone.any():
         return Y
