@@ -13,14 +13,14 @@ _LADDER = 1.25
 _WALK_RUNGS = 8
 
 
-def _ladder_errors(windows, k, ladder, noises, r, lag=1.0):
+def _ladder_errors(windows, k, ladder, noises, r, lag=1.0, finest=False):
     """Predicted r-th derivative error at the spacings ``ladder[1:]`` of a geometric ladder.
 
     Each rung fits the signal and the noise surrogate together (one system, six columns): the
     noise part is the surrogate fit's derivative; the bias part is the change of the signal
-    fit's derivative from the rung below, less that of the surrogate fit's, times ``lag`` (see
-    :data:`.knots.WHITE_BIAS_LAG`). Returns (noise variance, bias^2, per-window noise profiles) for
-    each rung above the first.
+    fit's derivative from the rung below (with ``finest``, from the first rung), less that of
+    the surrogate fit's, times ``lag`` (see :data:`.knots.WHITE_BIAS_LAG`). Returns (noise
+    variance, bias^2, per-window noise profiles) for each rung above the first.
     """
     var = np.zeros(len(ladder))
     bias2 = np.zeros(len(ladder))
@@ -42,7 +42,8 @@ def _ladder_errors(windows, k, ladder, noises, r, lag=1.0):
             nsc += wd.n_scored
             if prev[i] is not None:
                 change += c
-            prev[i] = ds
+            if prev[i] is None or not finest:
+                prev[i] = ds
             e_list.append((wd.t, e2))
         var[j] = var[j] / max(nsc, 1) if np.isfinite(var[j]) else np.inf
         bias2[j] = lag * max(change / max(nsc, 1), 0.0) if np.isfinite(change) else np.inf
