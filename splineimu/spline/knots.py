@@ -360,26 +360,29 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
     ladders = {}
     unread = set()  # (order, spacing) of the rungs that read no bias (for _between_rungs)
     for k, dt_cv in zip(orders, cv_spacings):
-        steps = np.arange(-1, 1) if dt_fixed is not None else (np.arange(-4, 1) if limited else np.arange(-2, 3))
-        ladder = dt_cv * _LADDER ** steps
         # motion-limited input is walked only toward finer spacings, and may go below the grid
         # (toward interpolation); the rung below the first one kept is its reference
         lo_k = lo * (0.5 if limited else 1.0)
-        # no rung beyond the walk's cap either, unless the value-optimal spacing is beyond it
-        hi_k = min(hi, walk_cap) if dt_fixed is None else hi
-        ok = (ladder >= lo_k * 0.99) & (ladder <= hi_k * (1.0 + 1e-9))
-        first = max(int(np.argmax(ok)) - 1, 0)
-        ladder = np.r_[ladder[first], ladder[first + 1:][ok[first + 1:]]]
         if dt_fixed is None and limited and estimate and r == 1:
-            # an estimator's rotation: every rung down to the finest, each against the finest
-            # (its detail is motion, which the finest follows best; method, step 4)
-            ladder = dt_cv * _LADDER ** np.arange(-int(np.floor(np.log(dt_cv / lo_k) / np.log(_LADDER) + 1e-9)) - 1, 1)
+            # an estimator's rotation: every rung down to the reference below lo_k, each read
+            # against that finest rung (its detail is motion, which the finest follows best;
+            # method, step 4)
+            below = int(np.floor(np.log(dt_cv / lo_k) / np.log(_LADDER) + 1e-9)) + 1
+            ladder = dt_cv * _LADDER ** np.arange(-below, 1)
             var, bias2, ends = _ladder_errors(windows, k, ladder, noises, r, bias_lag, finest=True)
-        elif dt_fixed is None:
-            top = ladder[-1] if limited else max(ladder[-1], hi_k)
-            ladder, var, bias2, ends = _walk_ladder(windows, k, ladder, noises, r, lo_k, top, bias_lag)
         else:
-            var, bias2, ends = _ladder_errors(windows, k, ladder, noises, r, bias_lag)
+            steps = np.arange(-1, 1) if dt_fixed is not None else (np.arange(-4, 1) if limited else np.arange(-2, 3))
+            ladder = dt_cv * _LADDER ** steps
+            # no rung beyond the walk's cap either, unless the value-optimal spacing is beyond it
+            hi_k = min(hi, walk_cap) if dt_fixed is None else hi
+            ok = (ladder >= lo_k * 0.99) & (ladder <= hi_k * (1.0 + 1e-9))
+            first = max(int(np.argmax(ok)) - 1, 0)
+            ladder = np.r_[ladder[first], ladder[first + 1:][ok[first + 1:]]]
+            if dt_fixed is None:
+                top = ladder[-1] if limited else max(ladder[-1], hi_k)
+                ladder, var, bias2, ends = _walk_ladder(windows, k, ladder, noises, r, lo_k, top, bias_lag)
+            else:
+                var, bias2, ends = _ladder_errors(windows, k, ladder, noises, r, bias_lag)
         ladders[k] = ladder
         unread.update((k, float(dt)) for dt, v, b in zip(ladder[1:], var, bias2) if b <= v * _BIAS_UNREAD)
         if white_noise:  # (coloured noise's estimate holds the surrogate's misfit too)
