@@ -11,6 +11,7 @@ zero phase), the full-band residual, and the synthesized signal's RMS above 15 H
 real IMU's.
 
     PYTHONPATH=$PWD python benchmarks/real_pairs.py [names...]   # writes results/real_pairs.md
+    PYTHONPATH=$PWD python benchmarks/real_pairs.py broad16@14   # its poses every 14th (20 Hz)
 
 Held-out BROAD trials (broad02 ... broad36) are read from the folders in $BROAD_DATA; EuRoC
 MH_01 (``mh01``, and ``mh01e20``: every 10th pose, fitted as an estimate) from the two files named in
@@ -129,13 +130,21 @@ def held(pair: Pair, label: str, m: int = 2) -> Pair:
                 pair.notes + [f"poses every {m}th, held {m}x"], aligned_by=pair)
 
 
-def every(pair: Pair, label: str, m: int = 10) -> Pair:
-    """The pair's poses every m-th (EuRoC's 200 Hz ground truth at 20 Hz), fitted as an
-    estimator's output (as from-euroc reads OpenVINS' csv of it, which carries IMU biases);
+def every(pair: Pair, label: str, m: int = 10, estimated=True) -> Pair:
+    """The pair's poses every m-th (EuRoC's 200 Hz ground truth at 20 Hz), by default fitted as
+    an estimator's output (as from-euroc reads OpenVINS' csv of it, which carries IMU biases);
     aligned with the pair."""
     s = slice(0, None, m)
     return Pair(label, pair.t_s[s], pair.positions[s], pair.quat_xyzw[s], pair.imu_t_s, pair.gyro, pair.accel,
-                pair.notes + [f"poses every {m}th, an estimate"], aligned_by=pair, estimated=True)
+                pair.notes + [f"poses every {m}th" + (", an estimate" if estimated is True else "")], aligned_by=pair,
+                estimated=estimated)
+
+
+def pair_named(name: str) -> Pair:
+    """A pair of :data:`PAIRS`, or ``<name>@<m>``: its poses every m-th, as measurements."""
+    base, _, m = name.partition("@")
+    pair = PAIRS[base]()
+    return pair if not m else every(pair, f"{pair.name} every {m}th pose", int(m), estimated="auto")
 
 
 PAIRS = {
@@ -326,7 +335,7 @@ def table(results) -> str:
 def main(names):
     results = {}
     for n in names:
-        pair = PAIRS[n]()
+        pair = pair_named(n)
         results[pair.name] = evaluate(pair, verbose=True)
     text = table(results)
     auto_lines = [f"- {n}: rotation order/spacing {r['auto']['rotation']}"

@@ -115,7 +115,15 @@ Method
    against the real IMU; now 18 ms, 0.99x. At 200 Hz: V1_02 10.6 -> 1.8 ms, full-band gyro
    1.075 -> 1.018x its best; MH_01 1.8 ms as before).
    Knots finer than the poses where the top of the band reads as noise (the held-out fits
-   interpolated noise correlated over neighbouring poses) are read the same way.
+   interpolated noise correlated over neighbouring poses) are read the same way. So is a
+   rotation read as noisy where the position is motion-limited (poses that precise) and the
+   rotation's value is best fitted at fewer than :data:`PRECISE_CV_POSES` pose spacings: motion
+   the poses sample too sparsely to predict, not noise (``read_as_noise`` keeps the first
+   reading). BROAD's hand-held mocap every 14th pose (20 Hz), 10 of 15 trials so read: 84-210 ms
+   knots, gyro below 10 Hz 2.6-5.6x the best fixed setting against the real IMU; now 17-20 ms,
+   1.00-1.05x. OpenVINS' 20 Hz V1_01 and udel_gore: 134-136 -> 18 ms. Slow rotation with 0.05-0.1
+   deg noise under fast precise positions (sums of sines at 20 Hz) is best fitted at 7-16 pose
+   spacings, and stays read as noise (interpolated, 10-50x its best).
 5. The rotation spacing never exceeds the time in which the input turns by 135 degrees
    (:func:`max_rotation_spacing`): further apart, neighbouring control rotations near the
    opposite turn. Fast smooth rotation is best close to it (the flips scene, 17 rad/s, AR(1)
@@ -537,11 +545,21 @@ def choose_knot_spacing(t, P, R, w=None, rotation_order="auto", position_order="
     w = np.ones(t.size) if w is None else np.asarray(w, dtype=np.float64)
     ro = ORDERS if rotation_order == "auto" else (int(rotation_order),)
     po = ORDERS if position_order == "auto" else (int(position_order),)
-    rot = choose_signal(t, rotation_increments(R, anchor_block(t)), w, 1, ro, rotation_dt,
-                        max_rotation_spacing(t, R, max_turn_rad),
-                        increments=True, as_motion=estimated_rotation, grid_phase=grid_phase)
+    X, turn = rotation_increments(R, anchor_block(t)), max_rotation_spacing(t, R, max_turn_rad)
+    rot = choose_signal(t, X, w, 1, ro, rotation_dt, turn, increments=True, as_motion=estimated_rotation,
+                        grid_phase=grid_phase)
     rot["estimated"] = bool(estimated_rotation)
     pos = choose_signal(t, np.ascontiguousarray(P), w, 2, po, position_dt)
+    h = float(np.median(np.diff(t)))
+    if (rotation_dt is None and not rot["motion_limited"] and pos["motion_limited"]
+            and rot["cv_knot_spacing_s"] < PRECISE_CV_POSES * h
+            and not all(rounding_only(wd.X) for wd in _windows(t, X, w, increments=True))):
+        # the positions hold motion to the top of their band, and the rotation's value is best
+        # fitted nearly through its poses: its top octave is motion too, unless it is rounding
+        # (exact poses; method, step 4)
+        read = {key: rot[key] for key in ("order", "knot_spacing_s", "predicted_rms")}
+        rot = choose_signal(t, X, w, 1, ro, None, turn, increments=True, as_motion=True, grid_phase=grid_phase)
+        rot["estimated"], rot["read_as_noise"] = False, read
     # an orientation error dtheta (isotropic) turns the specific force f by f x dtheta: RMS
     # sqrt(2/3) |f| |dtheta|, with |f| ~ g (slow motion, where it is the accelerometer's main error)
     tilt = float(np.sqrt(2.0 / 3.0) * GRAVITY_M_S2 * rot["value_rms"])
