@@ -152,6 +152,9 @@ def test_broad16_every_14th_pose_rotation_is_read_as_motion():
     assert rep.knot_spacing_s < 0.05, rep.summary()
     for q in ("gyro", "accel"):
         assert rows["auto"][f"{q}_lp10"] <= 1.02 * rows["scipy"][f"{q}_lp10"], (q, rows)
+    # declared measurements: read as noise, as before
+    _, told = fit(low.t_s, low.positions, low.quat_xyzw, return_report=True, estimated_rotation=False)
+    assert told.knot_spacing_s > 0.1 and "read_as_noise" not in told.knot_choice["rotation"], told.summary()
 
 
 @pytest.mark.slow

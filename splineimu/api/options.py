@@ -314,7 +314,8 @@ class SplineOptions(_Checked):
         ``"estimate"``: the rotations are an estimator's output that fused an IMU, their detail
         is motion and is kept (the fit's ``estimated_rotation``); ``"measurement"``: not;
         ``"auto"`` (default): an estimate when the pose file carries IMU biases (EuRoC's
-        ground truth, vicon2gt).
+        ground truth, vicon2gt), else measurements whose finest detail is read as motion where
+        the positions' is (low-rate precise poses of fast rotation).
     """
 
     kind: str = "split"

@@ -505,6 +505,10 @@ def _fit(job, track, log):
     if rep.knot_choice is not None and rep.knot_choice["rotation"].get("estimated"):
         why = "the file carries IMU biases" if sp.rotation_source == "auto" else "as told"
         log.line(f"rotation      an estimator's output ({why}): its detail is kept as motion")
+    elif rep.knot_choice is not None and "read_as_noise" in rep.knot_choice["rotation"]:
+        first = rep.knot_choice["rotation"]["read_as_noise"]
+        log.line(f"rotation      its finest detail read as motion, as the positions' is (read as noise: "
+                 f"{1e3 * first['knot_spacing_s']:.3g} ms knots); --rotation-source measurement keeps that")
     trim = sp.trim_s(rep)
     if trim > 0.0 and rep.knot_choice is not None:  # trimmed ends are not in the record: nothing to warn
         zone = max(c["end_zone_s"] for c in (rep.knot_choice["rotation"], rep.knot_choice["position"]))

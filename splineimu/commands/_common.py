@@ -104,7 +104,8 @@ def add_pose_args(p: argparse.ArgumentParser, fmt_help: str):
     g.add_argument("--rotation-source", choices=["auto", "estimate", "measurement"],
                    help="the rotations are an estimator's output that fused an IMU (estimate: their detail is "
                         "the vehicle's motion and is kept) or measurements (their detail may be noise); auto "
-                        "(default): estimate when the file carries IMU biases (EuRoC, vicon2gt)")
+                        "(default): estimate when the file carries IMU biases (EuRoC, vicon2gt), else "
+                        "measurements whose finest detail is kept where the positions' is motion")
     g.add_argument("--trim-ends", metavar="S",
                    help="leave S seconds at each end of the poses out of the IMU record, or auto: the fit's "
                         "end zones (k knot spacings), which see one-sided data (default 0)")

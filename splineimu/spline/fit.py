@@ -104,7 +104,7 @@ def _lines_warning(t, res_rot, keep, dt, choice):
 def _poses_in(t_s, positions, quat_xyzw, origin_ns, estimated):
     """fit()'s poses from arrays or from a track (:class:`splineimu.io.PoseTrack`), with the
     origin and whether the rotations are an estimator's output (``"auto"``: a track whose file
-    carries IMU biases)."""
+    carries IMU biases; None: not said, and not such a track)."""
     auto = isinstance(estimated, str) and estimated == "auto"
     if not auto and not isinstance(estimated, (bool, np.bool_)):
         raise SplineImuError(f"estimated_rotation must be True, False or 'auto', got {estimated!r}")
@@ -114,13 +114,13 @@ def _poses_in(t_s, positions, quat_xyzw, origin_ns, estimated):
             raise SplineImuError("a track gives the times, poses and origin: do not pass positions, quat_xyzw "
                                  "or origin_ns with it")
         if auto:
-            estimated = getattr(track, "bias_gyro", None) is not None
+            estimated = True if getattr(track, "bias_gyro", None) is not None else None
         origin = track.origin_ns
         t = (track.t_ns - origin).astype(np.float64) / 1e9
-        return t, track.positions, track.quat_xyzw, origin, bool(estimated)
+        return t, track.positions, track.quat_xyzw, origin, None if estimated is None else bool(estimated)
     if positions is None or quat_xyzw is None:
         raise SplineImuError("fit() takes times, positions and quat_xyzw, or a track read from a pose file")
-    return t_s, positions, quat_xyzw, 0 if origin_ns is None else origin_ns, not auto and bool(estimated)
+    return t_s, positions, quat_xyzw, 0 if origin_ns is None else origin_ns, None if auto else bool(estimated)
 
 
 def fit(t_s, positions=None, quat_xyzw=None, kind="split", order="auto", knot_spacing_s="auto", *,
@@ -180,8 +180,12 @@ def fit(t_s, positions=None, quat_xyzw=None, kind="split", order="auto", knot_sp
         as pose noise, V1_01/V2_01/V2_03's ground truth got ~100 ms rotation knots, where V1_02's
         gyro error below 10 Hz is 5.4x its best; the positions are smoothed as measurements.
         ``"auto"`` (default): True for a track whose file carries IMU biases (EuRoC's 17-column
-        ground truth, vicon2gt), else False. Arrays say nothing of where they come from: pass
-        True for EuRoC's ground truth given as arrays (or TUM text), or fit the track.
+        ground truth, vicon2gt); else measurements, whose top octave is read as motion where the
+        positions' is and the rotation's value is best fitted nearly through its poses (low-rate
+        precise poses of fast rotation: ``read_as_noise`` in the rotation's knot choice keeps the
+        first reading). False: measurements, never so read. Arrays say nothing of where they
+        come from: pass True for EuRoC's ground truth given as arrays (or TUM text), or fit the
+        track.
     progress : bool
         Show a progress bar for long fits.
     return_report : bool

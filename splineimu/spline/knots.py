@@ -514,7 +514,7 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
 
 def choose_knot_spacing(t, P, R, w=None, rotation_order="auto", position_order="auto",
                         rotation_dt=None, position_dt=None, max_turn_rad=MAX_CONTROL_TURN_RAD,
-                        estimated_rotation=False, grid_phase=True):
+                        estimated_rotation=None, grid_phase=True):
     """Choose order and knot spacing of rotation and position from the poses.
 
     Parameters
@@ -528,9 +528,12 @@ def choose_knot_spacing(t, P, R, w=None, rotation_order="auto", position_order="
         Fixed spacings (only the order, if "auto", is then chosen).
     max_turn_rad : float
         The most the input may turn in one rotation knot spacing (step 5).
-    estimated_rotation : bool
-        The rotation is an estimator's output that fused an IMU: its detail is motion to the
-        top of the band (``as_motion`` of :func:`choose_signal`).
+    estimated_rotation : bool or None
+        True: the rotation is an estimator's output that fused an IMU, its detail is motion to
+        the top of the band (``as_motion`` of :func:`choose_signal`). False: measurements, read
+        as such. None (not said): measurements, whose top octave is read again as motion where
+        the positions' is and the rotation's value is best fitted nearly through its poses
+        (step 4; ``read_as_noise`` in the result then keeps the first reading).
     grid_phase : bool
         Choose where the rotation's grid sits against the motion (step 6; ``knot_phase``, the
         spacing before the first pose its grid starts). False: on the first pose, as an se3
@@ -546,12 +549,12 @@ def choose_knot_spacing(t, P, R, w=None, rotation_order="auto", position_order="
     ro = ORDERS if rotation_order == "auto" else (int(rotation_order),)
     po = ORDERS if position_order == "auto" else (int(position_order),)
     X, turn = rotation_increments(R, anchor_block(t)), max_rotation_spacing(t, R, max_turn_rad)
-    rot = choose_signal(t, X, w, 1, ro, rotation_dt, turn, increments=True, as_motion=estimated_rotation,
+    rot = choose_signal(t, X, w, 1, ro, rotation_dt, turn, increments=True, as_motion=bool(estimated_rotation),
                         grid_phase=grid_phase)
     rot["estimated"] = bool(estimated_rotation)
     pos = choose_signal(t, np.ascontiguousarray(P), w, 2, po, position_dt)
     h = float(np.median(np.diff(t)))
-    if (rotation_dt is None and not rot["motion_limited"] and pos["motion_limited"]
+    if (rotation_dt is None and estimated_rotation is None and not rot["motion_limited"] and pos["motion_limited"]
             and rot["cv_knot_spacing_s"] < PRECISE_CV_POSES * h
             and not all(rounding_only(wd.X) for wd in _windows(t, X, w, increments=True))):
         # the positions hold motion to the top of their band, and the rotation's value is best
