@@ -116,14 +116,16 @@ Method
    1.075 -> 1.018x its best; MH_01 1.8 ms as before).
    Knots finer than the poses where the top of the band reads as noise (the held-out fits
    interpolated noise correlated over neighbouring poses) are read the same way. So is a
-   rotation read as noisy where the position is motion-limited (poses that precise) and the
-   rotation's value is best fitted at fewer than :data:`PRECISE_CV_POSES` pose spacings: motion
-   the poses sample too sparsely to predict, not noise (``read_as_noise`` keeps the first
-   reading). BROAD's hand-held mocap every 14th pose (20 Hz), 10 of 15 trials so read: 84-210 ms
-   knots, gyro below 10 Hz 2.6-5.6x the best fixed setting against the real IMU; now 17-20 ms,
-   1.00-1.05x. OpenVINS' 20 Hz V1_01 and udel_gore: 134-136 -> 18 ms. Slow rotation with 0.05-0.1
-   deg noise under fast precise positions (sums of sines at 20 Hz) is best fitted at 7-16 pose
-   spacings, and stays read as noise (interpolated, 10-50x its best).
+   rotation read as noisy beside precise positions (motion-limited, or best fitted at fewer than
+   :data:`PRECISE_POSITION_CV_POSES` pose spacings) whose value is best fitted at fewer than
+   :data:`PRECISE_CV_POSES` pose spacings: motion the poses sample too sparsely to predict, not
+   noise (``read_as_noise`` keeps the first reading). BROAD's hand-held mocap every 14th pose
+   (20 Hz), 13 of 15 trials so read: 43-393 ms knots, gyro below 10 Hz 1.14-6.3x the best fixed
+   setting against the real IMU; now 17-20 ms, 1.00-1.08x. EuRoC MH_01's ground truth every 10th
+   pose as TUM text: 136 -> 18 ms, 2.27 -> 0.99x. OpenVINS' 20 Hz V1_01, udel_gore, udel_arl and
+   10 Hz udel_garage: 35-168 -> 18-35 ms. Slow rotation with 0.05-0.1 deg noise under fast
+   precise positions (sums of sines at 20 Hz) is best fitted at 7-16 pose spacings, and stays
+   read as noise (interpolated, 10-50x its best).
 5. The rotation spacing never exceeds the time in which the input turns by 135 degrees
    (:func:`max_rotation_spacing`): further apart, neighbouring control rotations near the
    opposite turn. Fast smooth rotation is best close to it (the flips scene, 17 rad/s, AR(1)
@@ -246,6 +248,13 @@ _GRID_TOP_S = 2.0
 PRECISE_ROTATION_RAD = 1e-4
 PRECISE_CV_POSES = 3.0
 PRECISE_SLOPE = -2.0
+#: Positions best fitted (value-optimal) at fewer than this many pose spacings, or motion-limited,
+#: are precise for the motion they hold: a rotation read as noisy beside them is read again as
+#: motion where its own value-optimal spacing is under PRECISE_CV_POSES (method, step 4). BROAD's
+#: mocap and EuRoC MH_01's ground truth at 20 Hz: 0.9-1.7 pose spacings where the positions read
+#: as noisy; sums of sines at 20 Hz with 0.2-1 mm white or AR(1) noise: 3.3-21 (upsampled noise
+#: 0.9, its rotation already misread either way).
+PRECISE_POSITION_CV_POSES = 2.0
 
 
 def _best(table, orders):
@@ -554,12 +563,14 @@ def choose_knot_spacing(t, P, R, w=None, rotation_order="auto", position_order="
     rot["estimated"] = bool(estimated_rotation)
     pos = choose_signal(t, np.ascontiguousarray(P), w, 2, po, position_dt)
     h = float(np.median(np.diff(t)))
-    if (rotation_dt is None and estimated_rotation is None and not rot["motion_limited"] and pos["motion_limited"]
+    if (rotation_dt is None and estimated_rotation is None and not rot["motion_limited"]
+            and np.count_nonzero(w > 0) >= 64  # (as few as motion_limited reads)
+            and (pos["motion_limited"] or pos["cv_knot_spacing_s"] < PRECISE_POSITION_CV_POSES * h)
             and rot["cv_knot_spacing_s"] < PRECISE_CV_POSES * h
             and not all(rounding_only(wd.X) for wd in _windows(t, X, w, increments=True))):
-        # the positions hold motion to the top of their band, and the rotation's value is best
-        # fitted nearly through its poses: its top octave is motion too, unless it is rounding
-        # (exact poses; method, step 4)
+        # the positions are precise for their motion (motion-limited, or best fitted nearly
+        # through the poses), and so is the rotation's value: its top octave is motion too,
+        # unless it is rounding (exact poses; method, step 4)
         read = {key: rot[key] for key in ("order", "knot_spacing_s", "predicted_rms")}
         rot = choose_signal(t, X, w, 1, ro, None, turn, increments=True, as_motion=True, grid_phase=grid_phase)
         rot["estimated"], rot["read_as_noise"] = False, read
