@@ -117,3 +117,14 @@ def test_dropped_poses_and_gaps_leave_their_windows_out():
     dropped = keep & ~((t >= 30.2) & (t <= 30.6))
     assert residual_bursts(t, res, dropped, 2) == []
     assert residual_bursts(t[dropped], res[dropped], keep[dropped], 2) == []
+
+
+def test_burst_taper_is_scipys_tukey_window():
+    """The windows' taper equals scipy.signal.windows.tukey (surrogate._tukey avoids importing
+    scipy.signal into every fit)."""
+    from scipy.signal.windows import tukey
+
+    from splineimu.spline.surrogate import _tukey
+
+    for m in (32, 200, 201):
+        np.testing.assert_allclose(_tukey(m), tukey(m, 0.5), rtol=0, atol=1e-12)
