@@ -71,10 +71,13 @@ Method
    motion's (:func:`splineimu.spline.zones.end_bias2`); gaps of the input's lengths opened
    where there are poses give the error inside its gaps (``gaps``). Where the noise reads as
    white, a rotation rung whose bias estimate is below its noise part (within the scatter of
-   the noise realization, and lagging: the 1 kHz ellipse read 1.6e-4 rad/s for a true 2.7e-4)
-   takes at least the bias of the nearest rung above that reads one clearly, scaled down as
-   dt^(k - 1) or as steeply as it grows to the next clear rung (:func:`.ladder._extrapolate_bias`); a
-   best rotation rung that reads no bias at all is moved between rungs
+   the noise realization, and lagging: the 1 kHz ellipse read 1.6e-4 rad/s for a true 2.7e-4),
+   and a position rung under uncorrelated noise (the flips scene over 20 s, white noise: order 5
+   at its value-optimal 106 ms read no bias, accel 1.28-1.39x the best fixed setting on 5 of 13
+   seeds; now order 6 at 118 ms, at most 1.02x; 60 s scenes: mean accel ratio +0-1.5%, none
+   beyond 1.07x), takes at least the bias of the nearest rung above that reads one clearly,
+   scaled down as dt^(k - r) for the r-th derivative or as steeply as it grows to the next clear
+   rung (:func:`.ladder._extrapolate_bias`); a best rotation rung that reads no bias at all is moved between rungs
    (:func:`.ladder._between_rungs`). The accelerometer's prediction
    adds gravity tilted by the rotation fit's own (value) error, from the same ladder at r = 0
    (slow motion: without it the circle scene predicted 0.18x the measured accel error).
@@ -347,6 +350,9 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
     # the gyro's bias estimate lags; for white noise it is corrected (WHITE_BIAS_LAG)
     white_noise = r == 1 and slope > WHITE_SLOPE
     bias_lag = (FLAT_WHITE_BIAS_LAG if flat_white else WHITE_BIAS_LAG) if white_noise else 1.0
+    # rungs reading less bias than noise take a floor from the rungs above (step 3): the gyro's under
+    # white noise, the position's under uncorrelated noise
+    floor_bias = white_noise or (r == 2 and follow and lag <= 1 and slope > WHITE_SLOPE)
     if limited:
         # the residual is mostly motion the fit missed, not noise: look at finer spacings
         noises = [0.1 * nz for nz in noises]
@@ -402,7 +408,7 @@ def choose_signal(t, X, w, r, orders=ORDERS, dt_fixed=None, dt_max=np.inf, incre
                 var, bias2, ends = _ladder_errors(windows, k, ladder, noises, r, bias_lag)
         ladders[k] = ladder
         unread.update((k, float(dt)) for dt, v, b in zip(ladder[1:], var, bias2) if b <= v * _BIAS_UNREAD)
-        if white_noise:  # (coloured noise's estimate holds the surrogate's misfit too)
+        if floor_bias:  # (coloured noise's estimate holds the surrogate's misfit too)
             bias2 = _extrapolate_bias(ladder[1:], var, bias2, k - r)
         consider(k, ladder[1:], var, bias2, ends, dt_cv)
     best = least()
