@@ -107,7 +107,7 @@ def _extrapolate_bias(dts, var, bias2, p):
     and upsampled noise, 100-360 Hz, 0.2-3 mm): mean gyro ratio 0.975 -> 0.986x, worst
     unchanged (white 1.14x, coloured 1.18x); single cases moved either way (hand-held AR(1)
     0.88 -> 1.09x, slow white 1.03 -> 1.10x; rate-table AR(1) 1.11 -> 0.98x). Applied to the
-    position too where its noise reads uncorrelated and as flat (the flips scene over 20 s: its
+    position too where its noise reads uncorrelated and flatter than f^-1 (the flips scene over 20 s: its
     value-optimal rung read no bias, accel 1.28-1.39x the best fixed setting on 5 of 13 seeds)."""
     out = bias2.copy()
     clear = np.flatnonzero((bias2 > var) & np.isfinite(bias2))  # (singular rungs read inf)
