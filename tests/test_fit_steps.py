@@ -83,3 +83,26 @@ def test_the_real_files_steps_are_told():
         jumps = [(w.t_start_s, w.t_end_s) for w in rep.warnings if w.code == "unexplained_jump"]
         for ts in where:
             assert any(a - 0.02 <= ts <= b + 0.02 for a, b in jumps), (name, ts, jumps)
+
+
+def test_box_steps_read_a_jump_and_not_smooth_motion():
+    """The steps of 8-pose box means: a jump by d reads d at its pose (and -d where the poses
+    come back), a quadratic in time nothing (to rounding), white noise 1/sqrt(8) of the single
+    steps' (:func:`_steps`; both weigh the poses 1.5, -1.5, 0.5, -0.5, per box), and nothing
+    across a gap."""
+    from splineimu.spline.glitches import _box_steps, _steps
+
+    t = np.arange(2000) / 200.0
+    Y = np.c_[0.3 * t**2, 2.0 * t, np.zeros_like(t)]
+    np.testing.assert_allclose(_box_steps(t, Y, 8), 0.0, atol=1e-12)
+    Yg = Y.copy()
+    Yg[1000:1040, 0] += 0.01
+    K = _box_steps(t, Yg, 8)
+    assert K[1000, 0] == pytest.approx(0.01, abs=1e-12) and K[1040, 0] == pytest.approx(-0.01, abs=1e-12)
+    assert np.abs(K[:980]).max() < 1e-12 and np.abs(K[1060:]).max() < 1e-12
+    E = np.random.default_rng(0).normal(scale=1e-3, size=(200_000, 3))
+    te = np.arange(E.shape[0]) / 200.0
+    ratio = np.std(_box_steps(te, E, 8)[20:-20]) / np.std(_steps(te, E)[5:-5])
+    assert ratio == pytest.approx(1.0 / np.sqrt(8.0), rel=0.02)
+    tg = np.r_[t[:1000], t[1000:] + 5.0]  # a 5 s gap: the boxes spanning it read nothing
+    assert np.all(_box_steps(tg, Yg, 8)[985:1016] == 0.0)

@@ -43,9 +43,18 @@ MAX_GLITCH_S = 0.5
 STEP_SIGMAS = 6.0
 #: ... or above this many, 8 poses or more apart, where the poses between sit off the motion
 #: around them by one offset (:func:`_plateau`): for 200 ms under 1 mm white noise, 1.5 cm went
-#: unfound on 1 of 18 cases (6 without), 1 cm on 8 (15). At 3 sigmas no more were found, and the
-#: hour-long fit took 1.2 s more (hundreds of noise pairs to test).
+#: unfound on 1 of 18 cases (6 without), 1 cm on 8 (15; 3 with the box means below). At 3
+#: sigmas no more were found, and the hour-long fit took 1.2 s more (hundreds of noise pairs).
 PLATEAU_SIGMAS = 4.0
+
+
+#: ... or above this many robust sigmas of the steps of box means of :data:`BOX_POSES` poses
+#: (:func:`_box_steps`, 1/sqrt(BOX_POSES) of the single steps' noise), with the poses between
+#: off the motion by one offset (:func:`_plateau`): 1 cm for 200 ms under 1 mm white noise
+#: (single steps of about 4.5 sigmas) went unfound on 8 of 18 cases, 3 now (the ellipse, and
+#: the flips scene, whose motion the offset test's cubic does not follow over 400 ms).
+BOX_SIGMAS = 6.0
+BOX_POSES = 8
 
 
 #: A step of the poses standing alone, with no step back (the tracking moved its origin): above
@@ -182,14 +191,73 @@ def _plateau(t, Y, i, m, J, warn):
             and spread <= 2.0 * s_out)
 
 
+def _box_steps(t, Y, n, h=None):
+    """(N, d) steps of box means: the mean of poses i .. i + n - 1 less that of i - n .. i - 1,
+    less the mean of that difference n poses before and after (as :func:`_steps` for single
+    poses: a jump by d at pose i reads d, linear and quadratic motion nothing, white noise
+    1/sqrt(n) of the single steps'); zero where the boxes span a gap (more than 3 median
+    spacings ``h`` between two poses) and near the ends."""
+    N = t.size
+    out = np.zeros(Y.shape)
+    if N < 4 * n + 1:
+        return out
+    # B[i]: the sum of Y[j] - Y[j - n] over j = i .. i + n - 1, from the running sum of those
+    # differences (it telescopes to two box sums, so stays within 2n |Y|: a running sum of the
+    # poses themselves would round georeferenced ones, hours long, at 1e-4 m)
+    c = np.zeros((N - n + 1, Y.shape[1]))
+    np.cumsum(Y[n:] - Y[:-n], axis=0, out=c[1:])
+    B = np.zeros(Y.shape)
+    np.subtract(c[n:], c[:N - 2 * n + 1], out=B[n:N - n + 1])
+    B /= n
+    out[2 * n:N - 2 * n + 1] = B[2 * n:N - 2 * n + 1] - 0.5 * (B[n:N - 3 * n + 1] + B[3 * n:N - n + 1])
+    h = float(np.median(np.diff(t))) if h is None else h
+    for g in np.flatnonzero(np.diff(t) > 3.0 * h).tolist():  # (the interval g .. g + 1)
+        out[max(g - 2 * n + 1, 0):g + 2 * n + 1] = 0.0
+    return out
+
+
+def _box_glitches(t, Y, J, warn, width, h):
+    """(i, m) pairs of glitches of :data:`BOX_POSES` poses or more found by the box steps
+    (:func:`_box_steps`): opposite steps (within half the larger) at most :data:`MAX_GLITCH_S` apart, each a
+    local peak above :data:`BOX_SIGMAS` robust sigmas and the warning size, placed at the
+    single step nearest along it (within half a box) and confirmed by :func:`_plateau`."""
+    n = BOX_POSES
+    K = _box_steps(t, Y, n, h)
+    size = np.sqrt(np.einsum("ij,ij->i", K, K))
+    if not np.any(size > warn):  # (the noise level is read only where a step could count)
+        return []
+    sigma = _local_median(size, width) / 1.538
+    peak = size > np.maximum(BOX_SIGMAS * sigma, warn)
+    idx = [i for i in np.flatnonzero(peak).tolist() if size[i] >= size[max(i - n, 0):i + n + 1].max()]
+    found = []
+    last = -1
+    for a_, a in enumerate(idx):
+        for b in idx[a_ + 1:]:
+            if t[b] - t[a] > MAX_GLITCH_S:
+                break
+            if a <= last or b - a < n or np.linalg.norm(K[a] + K[b]) > 0.5 * max(size[a], size[b]):
+                continue
+            u = K[a] / size[a]
+            near_a = np.arange(max(a - n // 2, 0), min(a + n // 2 + 1, t.size))
+            near_b = np.arange(max(b - n // 2, 0), min(b + n // 2 + 1, t.size))
+            i = int(near_a[np.argmax(J[near_a] @ u)])
+            m = int(near_b[np.argmax(-(J[near_b] @ u))])
+            if m - i >= 8 and _plateau(t, Y, i, m, K, warn):  # (the offset against the box steps: less noisy)
+                found.append((i, m))
+                last = b
+                break
+    return found
+
+
 def _jump_glitches(t, parts, w):
     """The poses (bool (N,)) of glitches found in the poses with weight ``w`` > 0: a step by d and a step
     by -d (within half their size) 4 poses or more and at most :data:`MAX_GLITCH_S` apart, each above
     :data:`STEP_SIGMAS` robust sigmas of the steps nearby and the warning size, with its
     neighbours' steps near -d/2 (:func:`_steps`), and the other steps from 5 poses before to 5
     after under 0.7 of them; or above :data:`PLATEAU_SIGMAS`, 8 poses or more apart, with the
-    poses between off the motion around them by one offset (:func:`_plateau`). Every pose
-    between is dropped (they moved together).
+    poses between off the motion around them by one offset (:func:`_plateau`); or opposite steps
+    of box means (:func:`_box_glitches`) with that offset. Every pose between is dropped (they
+    moved together).
 
     A glitch long against the knots escapes the residual runs: 5 cm for 200 ms was partly
     followed (circle scene: position knots 129 ms, its residual two runs, each warned as a
@@ -207,7 +275,8 @@ def _jump_glitches(t, parts, w):
     t = t if every else t[used]
     if t.size < 4:
         return out, single
-    width = LOCAL_WINDOW_S / float(np.median(np.diff(t)))
+    h = float(np.median(np.diff(t)))
+    width = LOCAL_WINDOW_S / h
     for Y, _, _, _, _, warn in parts:
         Yu = Y if every else Y[used]
         J = _steps(t, Yu)
@@ -257,6 +326,8 @@ def _jump_glitches(t, parts, w):
             if near.size == 0 or size[near].max() <= 0.7 * min(size[i], size[m]):
                 out[used[i]:used[m]] = True
                 last = m
+        for i, m in _box_glitches(t, Yu, J, warn, width, h):  # (long glitches under the single steps' noise)
+            out[used[i]:used[m]] = True
     single &= ~out
     single[1:] &= ~out[:-1]  # (the step back of a glitch)
     return out, single
