@@ -43,16 +43,16 @@ MAX_GLITCH_S = 0.5
 STEP_SIGMAS = 6.0
 #: ... or above this many, 8 poses or more apart, where the poses between sit off the motion
 #: around them by one offset (:func:`_plateau`): for 200 ms under 1 mm white noise, 1.5 cm went
-#: unfound on 1 of 18 cases (6 without), 1 cm on 8 (15; 3 with the box means below). At 3
+#: unfound on 1 of 18 cases (6 without), 1 cm on 8 (15; 1 with the box means below). At 3
 #: sigmas no more were found, and the hour-long fit took 1.2 s more (hundreds of noise pairs).
 PLATEAU_SIGMAS = 4.0
 
 
 #: ... or above this many robust sigmas of the steps of box means of :data:`BOX_POSES` poses
 #: (:func:`_box_steps`, 1/sqrt(BOX_POSES) of the single steps' noise), with the poses between
-#: off the motion by one offset (:func:`_plateau`): 1 cm for 200 ms under 1 mm white noise
-#: (single steps of about 4.5 sigmas) went unfound on 8 of 18 cases, 3 now (the ellipse, and
-#: the flips scene, whose motion the offset test's cubic does not follow over 400 ms).
+#: off the motion by one offset (:func:`_plateau`, with a quintic): 1 cm for 200 ms under 1 mm
+#: white noise (single steps of about 4.5 sigmas) went unfound on 8 of 18 cases, 1 now (3 with
+#: a cubic, which does not follow the flips scene's motion over 400 ms).
 BOX_SIGMAS = 6.0
 BOX_POSES = 8
 
@@ -167,23 +167,23 @@ def _local_median(x, width):
     return np.r_[out, np.full(x.size - out.size, out[-1])]
 
 
-def _plateau(t, Y, i, m, J, warn):
-    """Whether poses i .. m - 1 sit off the motion around them by one offset: a cubic in time
-    through the poses on both sides (as many as between, at least 10 each) leaves the poses
-    between off by a mean at least the warning size and 4x the residual outside, agreeing with
-    the steps at i and m (within half), and about it no more spread than the residual outside
-    (twice its RMS)."""
+def _plateau(t, Y, i, m, J, warn, degree=3):
+    """Whether poses i .. m - 1 sit off the motion around them by one offset: a cubic (or a
+    polynomial of ``degree``) in time through the poses on both sides (as many as between, at
+    least 10 each) leaves the poses between off by a mean at least the warning size and 4x the
+    residual outside, agreeing with the steps ``J`` at i and m (within half), and about it no
+    more spread than the residual outside (twice its RMS)."""
     k = max(m - i, 10)
     a, b = i - k, m + k
     if a < 0 or b > t.size:
         return False
     side = np.r_[a:i, m:b]
     tc = (t - t[i]) / max(t[m] - t[i], 1e-12)
-    V = np.vander(tc[side], 4)
+    V = np.vander(tc[side], degree + 1)
     coef = np.linalg.lstsq(V, Y[side], rcond=None)[0]
     r_out = Y[side] - V @ coef
     s_out = float(np.sqrt(np.mean(np.sum(r_out**2, axis=1))))
-    r_in = Y[i:m] - np.vander(tc[i:m], 4) @ coef
+    r_in = Y[i:m] - np.vander(tc[i:m], degree + 1) @ coef
     off = r_in.mean(axis=0)
     size = float(np.linalg.norm(off))
     spread = float(np.sqrt(np.mean(np.sum((r_in - off) ** 2, axis=1))))
@@ -242,7 +242,9 @@ def _box_glitches(t, Y, J, warn, width, h):
             near_b = np.arange(max(b - n // 2, 0), min(b + n // 2 + 1, t.size))
             i = int(near_a[np.argmax(J[near_a] @ u)])
             m = int(near_b[np.argmax(-(J[near_b] @ u))])
-            if m - i >= 8 and _plateau(t, Y, i, m, K, warn):  # (the offset against the box steps: less noisy)
+            # (the offset against the box steps, less noisy; a quintic follows fast motion over
+            # the sides, where a cubic left the flips scene's 1 cm glitch under 4x its residual)
+            if m - i >= 8 and _plateau(t, Y, i, m, K, warn, degree=5):
                 found.append((i, m))
                 last = b
                 break
