@@ -218,9 +218,9 @@ def _box_steps(t, Y, n, h=None):
 
 def _box_glitches(t, Y, J, warn, width, h):
     """(i, m) pairs of glitches of :data:`BOX_POSES` poses or more found by the box steps
-    (:func:`_box_steps`): opposite steps (within half the larger) at most :data:`MAX_GLITCH_S` apart, each a
-    local peak above :data:`BOX_SIGMAS` robust sigmas and the warning size, placed at the
-    single step nearest along it (within half a box) and confirmed by :func:`_plateau`."""
+    (:func:`_box_steps`): opposite steps (within half the larger) at most :data:`MAX_GLITCH_S`
+    apart, each a local peak above :data:`BOX_SIGMAS` robust sigmas and the warning size, placed
+    at the largest single step along it within half a box, and confirmed by :func:`_plateau`."""
     n = BOX_POSES
     K = _box_steps(t, Y, n, h)
     size = np.sqrt(np.einsum("ij,ij->i", K, K))
@@ -232,10 +232,12 @@ def _box_glitches(t, Y, J, warn, width, h):
     found = []
     last = -1
     for a_, a in enumerate(idx):
+        if a <= last:  # (inside a glitch found)
+            continue
         for b in idx[a_ + 1:]:
             if t[b] - t[a] > MAX_GLITCH_S:
                 break
-            if a <= last or b - a < n or np.linalg.norm(K[a] + K[b]) > 0.5 * max(size[a], size[b]):
+            if b - a < n or np.linalg.norm(K[a] + K[b]) > 0.5 * max(size[a], size[b]):
                 continue
             u = K[a] / size[a]
             near_a = np.arange(max(a - n // 2, 0), min(a + n // 2 + 1, t.size))
