@@ -963,37 +963,24 @@ def test_long_glitch_is_dropped_whole(name, kind):
     assert accel_err(spl) < 1.1 * clean, (accel_err(spl), clean)
 
 
-def test_weaker_long_glitch_is_found_by_its_offset():
-    """1.5 cm for 200 ms under 1 mm white noise: its steps (about 6.7 robust sigmas, with the
-    noise under 6 at one end) went unfound, accel elsewhere 19x the best fixed setting on the
-    circle. Steps from 4 sigmas count where the poses between sit off a cubic through the poses
-    around them by one offset: all 40 dropped."""
-    sc, t, p, R = scene_poses("circle", "white", 60.0, 200.0, 2)
-    rng = np.random.default_rng(502)  # benchmarks/glitch_sweep.py's draw for seed 2
-    t0 = rng.uniform(5.0, 55.0)
-    d = rng.normal(size=3)
-    inside = (t >= t0) & (t < t0 + 0.2)
-    pg = p.copy()
-    pg[inside] += 0.015 * d / np.linalg.norm(d)
-    spl, rep = fit(t, pg, lie.matrix_to_quat_xyzw(R), return_report=True)
-    assert set(np.flatnonzero(inside).tolist()) <= set(rep.dropped_poses), rep.summary()
-    assert len(rep.dropped_poses) <= 42, rep.dropped_poses
-
-
-@pytest.mark.parametrize("scene_name, seed", [("circle", 2), ("ellipse", 2), ("flips", 0)])
-def test_long_glitch_under_the_single_steps_noise_is_found_by_box_means(scene_name, seed):
-    """1 cm for 200 ms under 1 mm white noise (glitch_sweep.py's draws): its single steps (about
-    4.5 robust sigmas) went unfound on every scene with seed 2, and the knots followed it
-    (circle: accel elsewhere 12x the best fixed setting, screw 9.9x). The steps of 8-pose box
-    means stand 7-15 sigmas out: all 40 poses dropped; on the flips scene once a quintic
-    through the poses around follows its motion (a cubic left 3.9 mm of residual there)."""
+@pytest.mark.parametrize("scene_name, seed, size", [("circle", 2, 0.015), ("circle", 2, 0.01),
+                                                    ("ellipse", 2, 0.01), ("flips", 0, 0.01)])
+def test_weaker_long_glitch_is_found_by_its_offset(scene_name, seed, size):
+    """Long glitches (200 ms) under 1 mm white noise, benchmarks/glitch_sweep.py's draws. 1.5 cm:
+    its steps (about 6.7 robust sigmas, with the noise under 6 at one end) went unfound, accel
+    elsewhere 19x the best fixed setting on the circle; steps from 4 sigmas count where the
+    poses between sit off a cubic through the poses around them by one offset. 1 cm: its single
+    steps (about 4.5 sigmas) went unfound on every scene with seed 2, the knots following it
+    (circle: accel elsewhere 12x, screw 9.9x); the steps of 8-pose box means stand 7-15 sigmas
+    out, and on the flips scene a quintic through the poses around follows its motion (a cubic
+    left 3.9 mm of residual there). All 40 poses dropped."""
     sc, t, p, R = scene_poses(scene_name, "white", 60.0, 200.0, seed)
     rng = np.random.default_rng(500 + seed)
     t0 = rng.uniform(5.0, 55.0)
     d = rng.normal(size=3)
     inside = (t >= t0) & (t < t0 + 0.2)
     pg = p.copy()
-    pg[inside] += 0.01 * d / np.linalg.norm(d)
+    pg[inside] += size * d / np.linalg.norm(d)
     spl, rep = fit(t, pg, lie.matrix_to_quat_xyzw(R), return_report=True)
     assert set(np.flatnonzero(inside).tolist()) <= set(rep.dropped_poses), rep.summary()
     assert len(rep.dropped_poses) <= 42, rep.dropped_poses
