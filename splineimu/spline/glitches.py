@@ -229,6 +229,11 @@ def _box_glitches(t, Y, J, warn, width, h):
     sigma = _local_median(size, width) / 1.538
     peak = size > np.maximum(BOX_SIGMAS * sigma, warn)
     idx = [i for i in np.flatnonzero(peak).tolist() if size[i] >= size[max(i - n, 0):i + n + 1].max()]
+
+    def strongest(c, u):  # the pose of the largest single step along u within half a box of c
+        near = np.arange(max(c - n // 2, 0), min(c + n // 2 + 1, t.size))
+        return int(near[np.argmax(J[near] @ u)])
+
     found = []
     last = -1
     for a_, a in enumerate(idx):
@@ -240,10 +245,7 @@ def _box_glitches(t, Y, J, warn, width, h):
             if b - a < n or np.linalg.norm(K[a] + K[b]) > 0.5 * max(size[a], size[b]):
                 continue
             u = K[a] / size[a]
-            near_a = np.arange(max(a - n // 2, 0), min(a + n // 2 + 1, t.size))
-            near_b = np.arange(max(b - n // 2, 0), min(b + n // 2 + 1, t.size))
-            i = int(near_a[np.argmax(J[near_a] @ u)])
-            m = int(near_b[np.argmax(-(J[near_b] @ u))])
+            i, m = strongest(a, u), strongest(b, -u)
             # (the offset against the box steps, less noisy; a quintic follows fast motion over
             # the sides, where a cubic left the flips scene's 1 cm glitch under 4x its residual)
             if m - i >= 8 and _plateau(t, Y, i, m, K, warn, degree=5):
