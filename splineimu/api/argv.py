@@ -16,7 +16,7 @@ FLAGS = {
     "kind": "--spline", "order": "--order", "knot_spacing_s": "--knot-spacing", "smoothness": "--smoothness",
     "keep_outliers": "--keep-outliers", "trim_ends_s": "--trim-ends", "rotation_source": "--rotation-source",
     "path": "POSES", "format": "COMMAND", "repeated_stamps": "--repeated-stamps", "max_gap_s": "--max-gap",
-    "gaps": "--gaps",
+    "gaps": "--gaps", "retime_stamps": "--retime-stamps",
     "name": "SCENE", "duration_s": "--duration", "t0_ns": "--t0-ns", "params": "--param",
     "dir": "--out", "force": "--force", "bag": "--bag", "plot": "--plot", "tum": "--tum",
     "vibration": "--vibration", "timing": "--time-offset/--clock-drift-ppm/--stamp-noise/--drop-probability",
@@ -38,7 +38,7 @@ def job_argv(job) -> list[str]:
     if hasattr(m, "spline"):  # a pose file (PosesInput)
         argv = ["from-tum" if m.format == "tum" else "from-euroc", m.path]
         argv += _flags(m.spline, SPLINE_FIELDS)
-        argv += _flags(m, ("repeated_stamps", "max_gap_s", "gaps"))
+        argv += _flags(m, ("repeated_stamps", "retime_stamps", "max_gap_s", "gaps"))
     else:
         argv = ["scene", m.name] + _flags(m, ("duration_s", "t0_ns"))
         for k, v in m.params.items():

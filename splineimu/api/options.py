@@ -363,6 +363,9 @@ class PosesInput(_Checked):
     format : {"tum", "euroc"}, optional
         Default: ``euroc`` for ``.csv`` files, else ``tum``.
     repeated_stamps : {"error", "first"}
+    retime_stamps : bool
+        The stamps are receive times: put the poses back on the capture clock fitted to them
+        (:func:`splineimu.stamps.retime_stamps`) before the fit.
     max_gap_s : float, optional
         Longest gap bridged silently (default 0.5 s, or 5x the median spacing if larger).
     gaps : {"error", "bridge", "split"}
@@ -373,6 +376,7 @@ class PosesInput(_Checked):
     path: str = None
     format: str | None = None
     repeated_stamps: str = "error"
+    retime_stamps: bool = False
     max_gap_s: float | None = None
     gaps: str = "error"
     spline: SplineOptions = field(default_factory=SplineOptions)
@@ -384,6 +388,7 @@ class PosesInput(_Checked):
             self.format = "euroc" if self.path.lower().endswith(".csv") else "tum"
         self.format = self._choice("format", ("tum", "euroc"))
         self.repeated_stamps = self._choice("repeated_stamps", ("error", "first"))
+        self.retime_stamps = self._bool("retime_stamps")
         if self.max_gap_s is not None:
             name, kw = self._kw("max_gap_s")
             self.max_gap_s = positive_float(self.max_gap_s, name, **kw)

@@ -14,6 +14,7 @@
       # gaps: error               # error | bridge | split
       # max_gap_s: 0.5
       # repeated_stamps: error    # error | first
+      # retime_stamps: false      # true: receive-time stamps, put back on the capture clock
     imu:
       rate_hz: 200
       timestamps: real_imu0.csv   # optional: synthesize at these stamps
@@ -80,7 +81,7 @@ from .options import (
 KEYS = {
     (): ("motion", "imu", "seed", "output", "cameras", "landmarks", "vary"),
     ("motion",): ("scene", "duration_s", "t0_ns", "params", "poses", "format", "spline", "gaps", "max_gap_s",
-                  "repeated_stamps"),
+                  "repeated_stamps", "retime_stamps"),
     ("motion", "spline"): SPLINE_FIELDS,
     ("imu",): ("rate_hz", "timestamps", "model", "extrinsic", "gravity", "sampling", "increments", "timing",
                "vibration", "rostopic"),
@@ -207,8 +208,8 @@ def job_from_document(doc, base) -> SynthesisJob:
         rel(m, "poses")
         spline = _build(SplineOptions, doc, _section(doc, ("motion", "spline")), ("motion", "spline"),
                         SPLINE_FIELDS)
-        source = _build(PosesInput, doc, m, ("motion",), ("path", "format", "repeated_stamps", "max_gap_s", "gaps"),
-                        spline=spline)
+        source = _build(PosesInput, doc, m, ("motion",),
+                        ("path", "format", "repeated_stamps", "retime_stamps", "max_gap_s", "gaps"), spline=spline)
     if imu.get("timestamps") is not None and imu.get("rate_hz") is not None:  # the rate was ignored in silence
         raise doc.error("`imu.rate_hz` and `imu.timestamps` are both given: the samples are at the file's "
                         "stamps; remove rate_hz", "imu", "rate_hz")

@@ -441,6 +441,13 @@ def _prepare_poses(job, log) -> PreparedMotion:
 
     m = job.motion
     track = _read(m)
+    if m.retime_stamps:  # receive times: the poses back on their capture clock
+        from dataclasses import replace
+
+        from ..stamps import retime_stamps
+
+        rt = retime_stamps(track.t_ns, track.positions, track.quat_xyzw, path=m.path)
+        track = replace(track, t_ns=rt.t_ns, notices=[*track.notices, rt.summary()])
     for note in track.notices:
         log.note(f"note: {m.path}: {note}")
     med = float(np.median(np.diff(track.t_ns))) / 1e9

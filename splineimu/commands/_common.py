@@ -117,6 +117,9 @@ def add_pose_args(p: argparse.ArgumentParser, fmt_help: str):
     g = p.add_argument_group("input hygiene")
     g.add_argument("--repeated-stamps", choices=["error", "first"],
                    help="a stamp repeated with a different pose: stop (default) or keep the first row")
+    g.add_argument("--retime-stamps", action="store_true", default=None,
+                   help="the stamps are receive times (delivery jitter, stalls, dropped frames): put the poses "
+                        "back on the capture clock fitted to them before the fit")
     g.add_argument("--keep-outliers", action="store_true", default=None,
                    help="do not drop poses whose fit residual is beyond 8 robust sigmas")
     add_output_args(p)
@@ -162,7 +165,8 @@ def options_from_args(args, motion: str):
                                         smoothness="smoothness", keep_outliers="keep_outliers",
                                         trim_ends_s="trim_ends", rotation_source="rotation_source"), origin=o)
         source = PosesInput(args.poses, motion, **_given(args, repeated_stamps="repeated_stamps",
-                                                         max_gap_s="max_gap", gaps="gaps"), spline=spline, origin=o)
+                                                         retime_stamps="retime_stamps", max_gap_s="max_gap",
+                                                         gaps="gaps"), spline=spline, origin=o)
         if args.out is None:
             args.out = Path(args.poses).stem + "_imu"
     imu = ImuOptions(**_given(args, rate_hz="rate", timestamps="timestamps", model="imu", extrinsic="extrinsic",

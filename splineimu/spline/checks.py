@@ -215,7 +215,7 @@ def stamp_warnings(t, P, theta):
         f"are shorter than {JITTER_SHORT:g}x the median spacing ({1e3 * h:.3g} ms) yet the poses move in them as far "
         "as in a whole one: the stamps are jittered (receive times?), not the motion; the fit reads the jitter as "
         "noise or jumps and the synthesized IMU is wrong at the motion's rates: stamp the poses with their capture "
-        "times", a, b)]
+        "times, or re-time them onto the capture clock (--retime-stamps; splineimu.stamps.retime_stamps)", a, b)]
 
 
 #: Poses that repeat their predecessor exactly (a later stamp, the same pose) in short runs within
