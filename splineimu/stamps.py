@@ -11,10 +11,10 @@ as motion (ov_data's KAIST VIO mocap, 50 Hz: finite-difference accelerations of 
 1. **Period**: candidates are the one (within 2% of the median interval) at which the stamps'
    phases concentrate most, refined over growing spans, the nominal rate (whole hertz), and each
    refined as the line through the least delays of blocks of the record (a clock drift against
-   the logger's clock is part of the period). Each is assigned (step 3, one pass); of those on
-   which the poses move more smoothly than at the stamps as given, the one with the least median
-   delay is kept (a period off tilts the delays' lower envelope). Receive timers coarser than the
-   jitter blur the phases (KAIST VIO: phase coherence 0.01-0.64).
+   the logger's clock is part of the period). Each is assigned (step 3, one pass), and the one
+   on which the poses move most smoothly is kept (mean pseudo-Huber norm of their second
+   differences in common units), if more smoothly than at the stamps as given. Receive timers
+   coarser than the jitter blur the phases (KAIST VIO: phase coherence 0.01-0.64).
 2. **Offset**: the earliest phase, so that no delay is negative; the new stamps are the capture
    times plus the least delivery delay (a constant the IMU-to-pose time offset absorbs).
 3. **Slots**: the latest slot at or before each stamp, made strictly increasing (a burst's poses
@@ -29,8 +29,9 @@ Measured on the analytic scenes at 50 Hz (7% of the frames dropped, 1-10 ms dela
 right but for stalls at the very ends of a record, and the fitted IMU as good as from the capture
 times (ellipse, 60 s: accel 0.0100 m/s^2 both; from the receive times 6.4). ov_data's KAIST VIO
 mocap (11 recordings at 50 Hz, no IMU truth): fit residual 2.6-190 mm -> 0.06-2.4 mm, jump
-warnings 21 -> 1-5 (circle: 36 -> 0.24 mm, position knots 2.5 s -> 44 ms); the clock at 20.0000
-ms on 7 of them, on 4 at 19.971-20.003 ms with longer delays (:data:`DOUBTFUL_DELAY`).
+warnings 21 -> 1-6 (circle: 36 -> 0.21 mm, position knots 2.5 s -> 43 ms); the clock at 20.0000
+ms on 9 of them (on 7 with the least median delay instead of the smoothest motion), 20.0016 and
+20.0031 ms on two; four told doubtful (:data:`DOUBTFUL_DELAY`).
 
 Where it fails: stamps without a steady capture clock (variable-rate input) are refused; a stall
 at the very end of a record cannot be told from a late start of the following frames (no later
@@ -55,8 +56,8 @@ DELAY_COST = 0.5
 #: poses at 50 Hz take 16 states (0.3 s) in 2.3 MB; an hour at 200 Hz 18 states (90 ms).
 MAX_TABLE_BYTES = 256e6
 #: A re-timing whose median delay exceeds this share of the period is told as doubtful: on
-#: KAIST VIO's mocap the clocks found at 20.0000 ms (7 of 11 recordings) leave median delays of
-#: 0.51-0.58 of a period, the four found at 19.971-20.003 ms 0.73-0.89.
+#: KAIST VIO's mocap 7 of 11 recordings leave median delays of 0.51-0.58 of a period, four 0.73-1.02
+#: (two on 20.0000 ms with their phases spread over the whole period, two on 20.0016 and 20.0031 ms).
 DOUBTFUL_DELAY = 0.65
 
 
@@ -213,13 +214,12 @@ def retime_stamps(t_ns, positions, quat_xyzw, max_delay_s: float = 0.3, path: st
         n = assign(h, m, m)
         if n is not None:
             tried.append((h, T0, m, n, latest))
-    # of the clocks on which the poses move more smoothly than at the stamps as given (mean
-    # pseudo-Huber norm of their second differences in common units), the one with the least
-    # median delay: a period off tilts the delays' lower envelope and lengthens them
+    # the clock on which the poses move most smoothly (mean pseudo-Huber norm of their second
+    # differences in common units), if more smoothly than at the stamps as given
     times = [t] + [T0 + n * h for h, T0, _, n, _ in tried]
     units = np.min([_scales(Y, x, 1.0) for x in times], axis=0)
     rough = [_roughness(Y, x, units) for x in times]
-    ok = [(float(np.median(t - x)), i) for i, x in enumerate(times[1:]) if rough[1 + i] < rough[0]]
+    ok = [(rough[1 + i], i) for i in range(len(tried)) if rough[1 + i] < rough[0]]
     if not ok:
         raise InputError("the stamps hold no steady capture clock to re-time onto: on none found do the poses "
                          "move more smoothly than at the stamps as given (variable-rate poses, not receive-time "
