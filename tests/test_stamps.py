@@ -148,3 +148,16 @@ def test_doubtful_retiming_is_told():
 
     assert not rt(0.5 * DOUBTFUL_DELAY * 0.02).doubtful and "doubtful" not in rt(0.005).summary()
     assert rt(1.1 * DOUBTFUL_DELAY * 0.02).doubtful and "doubtful" in rt(0.015).summary()
+
+
+def test_scene_file_and_command_line_carry_the_option(tmp_path):
+    """``retime_stamps: true`` in a scene file is the job's option and its command line's flag."""
+    from splineimu.api.scenefile import load_scene_file
+
+    (tmp_path / "poses.tum").write_text("0 0 0 0 0 0 0 1\n")
+    f = tmp_path / "job.yaml"
+    f.write_text("motion:\n  poses: poses.tum\n  retime_stamps: true\nimu:\n  rate_hz: 100\noutput:\n  dir: out\n")
+    job = load_scene_file(f)
+    assert job.motion.retime_stamps is True and "--retime-stamps" in job.to_argv()
+    f.write_text("motion:\n  poses: poses.tum\nimu:\n  rate_hz: 100\noutput:\n  dir: out\n")
+    assert load_scene_file(f).motion.retime_stamps is False
