@@ -19,7 +19,7 @@ from splineimu.stamps import _monotone, retime_stamps
 RATE = 50.0
 
 
-def received(name, seed, duration=30.0, stalls=True, jitter=True):
+def received(name, seed, duration=30.0, stalls=True, jitter=True, delays=(0.001, 0.010)):
     """``(scene, capture times, receive times, positions, quat_xyzw)``: 7% of the frames dropped,
     1-10 ms delivery delays, and (``stalls``) one frame in 150 held 100-270 ms with the frames
     queued behind it, delivered 0.1 ms apart; 0.3 mm / 0.05 deg pose noise."""
@@ -30,7 +30,7 @@ def received(name, seed, duration=30.0, stalls=True, jitter=True):
     k = sc.kinematics(tc)
     p = k.position_world + 3e-4 * rng.normal(size=(tc.size, 3))
     q = lie.matrix_to_quat_xyzw(k.world_R_body @ lie.so3_exp(np.radians(0.05) * rng.normal(size=(tc.size, 3))))
-    tr = tc + (rng.uniform(0.001, 0.010, tc.size) if jitter else 0.001)
+    tr = tc + (rng.uniform(*delays, tc.size) if jitter else 0.001)
     i = 0
     while stalls and i < tc.size:
         if rng.random() < 1.0 / 150.0:
@@ -40,7 +40,8 @@ def received(name, seed, duration=30.0, stalls=True, jitter=True):
             i = j
         else:
             i += 1
-    tr = np.maximum.accumulate(tr + 1e-7 * np.arange(tr.size))  # delivered in order
+    for i in range(1, tr.size):  # delivered in order, 0.1 ms apart at least
+        tr[i] = max(tr[i], tr[i - 1] + 1e-4)
     return sc, tc, tr, p, q
 
 
@@ -161,3 +162,18 @@ def test_scene_file_and_command_line_carry_the_option(tmp_path):
     assert job.motion.retime_stamps is True and "--retime-stamps" in job.to_argv()
     f.write_text("motion:\n  poses: poses.tum\nimu:\n  rate_hz: 100\noutput:\n  dir: out\n")
     assert load_scene_file(f).motion.retime_stamps is False
+
+
+def test_doubtful_retiming_is_a_warning(tmp_path):
+    """Delays spread over 1.7 periods (no least delay most poses share): the re-timing is told
+    doubtful, as a warning in report.json."""
+    from splineimu.cli import main
+
+    _, tc, tr, p, q = received("ellipse", 1, duration=20.0, stalls=False, delays=(0.001, 0.035))
+    src = tmp_path / "received.tum"
+    np.savetxt(src, np.column_stack([1.6e9 + tr, p, q]), fmt="%.9f")
+    out = tmp_path / "out"
+    assert main(["from-tum", str(src), "-o", str(out), "--rate", "100", "--retime-stamps"]) == 0
+    rep = json.loads((out / "report.json").read_text())
+    (w,) = [w for w in rep["warnings"] if w["code"] == "stamps_retime_doubtful"]
+    assert "median" in w["message"] and "doubtful" in w["message"]

@@ -448,6 +448,9 @@ def _prepare_poses(job, log) -> PreparedMotion:
 
         rt = retime_stamps(track.t_ns, track.positions, track.quat_xyzw, path=m.path)
         track = replace(track, t_ns=rt.t_ns, notices=[*track.notices, rt.summary()])
+        doubt = rt.summary() if rt.doubtful else None  # (a warning of every piece's fit)
+    else:
+        doubt = None
     for note in track.notices:
         log.note(f"note: {m.path}: {note}")
     med = float(np.median(np.diff(track.t_ns))) / 1e9
@@ -464,7 +467,7 @@ def _prepare_poses(job, log) -> PreparedMotion:
              f"median spacing {med * 1e3:.3f} ms")
     prep = PreparedMotion(m, track=track, gaps=gaps, max_gap_s=max_gap, split=bool(gaps and m.gaps == "split"))
     if not prep.split:
-        prep.pieces.append((track, *_fit(job, track, log)))
+        prep.pieces.append((track, *_fit(job, track, log, doubt)))
         return prep
     pieces = split_at_gaps(track, gaps)
     short = [p for p in pieces if p.t_ns.size < MIN_PIECE_POSES]
@@ -474,7 +477,7 @@ def _prepare_poses(job, log) -> PreparedMotion:
                  f"({sum(p.t_ns.size for p in short)} poses)")
     if not pieces:
         raise InputError(f"no piece between gaps has {MIN_PIECE_POSES} poses or more", path=m.path)
-    prep.pieces = [(p, *_fit(job, p, _Log(SynthesisResult(job), None))) for p in pieces]
+    prep.pieces = [(p, *_fit(job, p, _Log(SynthesisResult(job), None), doubt)) for p in pieces]
     return prep
 
 
@@ -490,8 +493,9 @@ def _read(m: PosesInput):
     return read_euroc_groundtruth(m.path, repeated_stamps=m.repeated_stamps)
 
 
-def _fit(job, track, log):
-    """The spline of one piece of a pose file and its fit report (dropped poses with their lines)."""
+def _fit(job, track, log, retime_doubt=None):
+    """The spline of one piece of a pose file and its fit report (dropped poses with their lines);
+    ``retime_doubt``: the summary of a doubtful re-timing of its stamps, told as a warning."""
     from ..spline.fit import fit
 
     sp = job.motion.spline
@@ -521,6 +525,10 @@ def _fit(job, track, log):
         zone = max(c["end_zone_s"] for c in (rep.knot_choice["rotation"], rep.knot_choice["position"]))
         if trim >= 0.99 * zone:
             rep.warnings = [w for w in rep.warnings if w.code != "ends_less_accurate"]
+    if retime_doubt is not None:
+        from ..spline.report import FitWarning
+
+        rep.warnings.append(FitWarning("stamps_retime_doubtful", retime_doubt))
     for w in fit_warnings(rep):  # also in report.json and in the fit summary
         log.note(f"warning: {w['message']}")
     if rep.dropped_poses:
