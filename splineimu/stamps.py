@@ -49,6 +49,7 @@ import numpy as np
 from . import lie
 from ._kernels import stamps as _kst
 from .errors import InputError
+from .spline.signals import rotation_increments
 
 #: Cost of one period of delay against the smoothness of the motion (pseudo-Huber units).
 DELAY_COST = 0.5
@@ -124,11 +125,8 @@ def _period(t, h0):
 
 def _monotone(m):
     """``m`` made strictly increasing by moving entries back (the largest such sequence <= m)."""
-    out = m.copy()
-    for i in range(out.size - 2, -1, -1):
-        if out[i] >= out[i + 1]:
-            out[i] = out[i + 1] - 1
-    return out
+    k = np.arange(m.size)
+    return np.minimum.accumulate((m - k)[::-1])[::-1] + k
 
 
 def _second_differences(Y, t):
@@ -137,10 +135,9 @@ def _second_differences(Y, t):
     return 2.0 * ((Y[2:] - Y[1:-1]) / d2 - (Y[1:-1] - Y[:-2]) / d1) / (d1 + d2)
 
 
-def _scales(Y, n, h):
-    """Median norm of the second differences of position and rotation (Y's two halves) at times
-    ``n h`` (slots n and period h, or times n and h = 1)."""
-    a = _second_differences(Y, np.asarray(n, dtype=np.float64) * h)
+def _scales(Y, t):
+    """Median norm of the second differences of position and rotation (Y's two halves) at times t."""
+    a = _second_differences(Y, t)
     return np.array([np.median(np.linalg.norm(a[:, 3 * j:3 * j + 3], axis=1)) + 1e-12 for j in range(2)])
 
 
@@ -188,8 +185,7 @@ def retime_stamps(t_ns, positions, quat_xyzw, max_delay_s: float = 0.3, path: st
     h0 = float(np.median(np.diff(t)))
     if not h0 > 0:
         raise InputError("re-timing: the median interval between stamps is zero", path=path)
-    R = lie.quat_xyzw_to_matrix(np.asarray(quat_xyzw, dtype=np.float64))
-    steps = lie.so3_log(np.einsum("nji,njk->nik", R[:-1], R[1:]))
+    steps = rotation_increments(lie.quat_xyzw_to_matrix(np.asarray(quat_xyzw, dtype=np.float64)))
     Y = np.ascontiguousarray(np.hstack([np.asarray(positions, dtype=np.float64),
                                         np.vstack([np.zeros((1, 3)), np.cumsum(steps, axis=0)])]))
     h_coh, _ = _period(t, h0)
@@ -204,7 +200,7 @@ def retime_stamps(t_ns, positions, quat_xyzw, max_delay_s: float = 0.3, path: st
     back = np.zeros((t.size, S, S), dtype=np.int8)
 
     def assign(h, m, n):
-        s, cost = _kst.assign_slots(m, Y, _scales(Y, n, h), h, S, DELAY_COST, 0, back)
+        s, cost = _kst.assign_slots(m, Y, _scales(Y, n * h), h, S, DELAY_COST, back)
         return m - s if np.isfinite(cost) else None
 
     for h in sorted({round(x, 12) for x in cands}):
@@ -217,7 +213,7 @@ def retime_stamps(t_ns, positions, quat_xyzw, max_delay_s: float = 0.3, path: st
     # the clock on which the poses move most smoothly (mean pseudo-Huber norm of their second
     # differences in common units), if more smoothly than at the stamps as given
     times = [t] + [T0 + n * h for h, T0, _, n, _ in tried]
-    units = np.min([_scales(Y, x, 1.0) for x in times], axis=0)
+    units = np.min([_scales(Y, x) for x in times], axis=0)
     rough = [_roughness(Y, x, units) for x in times]
     ok = [(rough[1 + i], i) for i in range(len(tried)) if rough[1 + i] < rough[0]]
     if not ok:

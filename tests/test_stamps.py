@@ -112,7 +112,7 @@ def test_slot_assignment_is_the_least_cost_one():
 
     costs = {s: cost(s) for s in itertools.product(range(S), repeat=7)}
     best = min(costs, key=costs.get)
-    s, c = assign_slots(m, Y, scales, h, S, prior, 0, np.zeros((7, S, S), dtype=np.int8))
+    s, c = assign_slots(m, Y, scales, h, S, prior, np.zeros((7, S, S), dtype=np.int8))
     assert c == pytest.approx(costs[best], rel=1e-12)
     assert tuple(s) == best
 

@@ -9,12 +9,12 @@ from .._jit import jit
 
 
 @jit
-def assign_slots(m, Y, scales, h, S, prior, s0, back):
+def assign_slots(m, Y, scales, h, S, prior, back):
     """Delays ``s`` (N,) in periods, ``0 <= s < S``, below the latest slots ``m`` (N,) the stamps
     allow (strictly increasing), such that the slots ``n = m - s`` increase strictly and the poses
     ``Y`` (N, 6: position and accumulated rotation) move smoothly at the slot times ``n h``: the
     cost of pose i is the pseudo-Huber norm of its second difference (per part, in units of
-    ``scales``) plus ``prior`` per period of delay away from ``s0``. ``back`` (N, S, S) int8 scratch. Returns the
+    ``scales``) plus ``prior`` per period of delay. ``back`` (N, S, S) int8 scratch. Returns the
     least total cost (inf: no strictly increasing assignment within S)."""
     N = m.shape[0]
     inf = np.inf
@@ -22,7 +22,7 @@ def assign_slots(m, Y, scales, h, S, prior, s0, back):
     for a in range(S):
         for b in range(S):
             if m[1] - b > m[0] - a:
-                D[a, b] = prior * (abs(a - s0) + abs(b - s0))
+                D[a, b] = prior * (a + b)
     E = np.empty((S, S))
     for i in range(1, N - 1):
         for b in range(S):
@@ -40,7 +40,7 @@ def assign_slots(m, Y, scales, h, S, prior, s0, back):
                     if nc <= nb:
                         continue
                     d2 = (nc - nb) * h
-                    cost = D[a, b] + prior * abs(c - s0)
+                    cost = D[a, b] + prior * c
                     for part in range(2):
                         acc2 = 0.0
                         for z in range(3):
