@@ -148,3 +148,30 @@ def sine_positions(t, table=HAND_SINES, r=0):
     """The r-th derivative (0 or 2) of positions given as sums of sines per axis, (N, 3)."""
     sign = 1.0 if r == 0 else -1.0
     return np.column_stack([sum(sign * a * w**r * np.sin(w * t + ph) for a, w, ph in axis) for axis in table])
+
+
+def received(name, seed, duration=30.0, stalls=True, jitter=True, delays=(0.001, 0.010), rate=50.0):
+    """``(scene, capture times, receive times, positions, quat_xyzw)`` of mocap at ``rate`` logged
+    on arrival (splineimu.stamps): 7% of the frames dropped, 1-10 ms delivery delays, and
+    (``stalls``) one frame in 150 held 100-270 ms with the frames queued behind it, delivered 0.1
+    ms apart; 0.3 mm / 0.05 deg pose noise."""
+    sc = make_scene(name, duration_s=duration)
+    rng = np.random.default_rng(seed)
+    tc = np.arange(0.0, duration, 1.0 / rate)
+    tc = tc[rng.random(tc.size) > 0.07]
+    k = sc.kinematics(tc)
+    p = k.position_world + 3e-4 * rng.normal(size=(tc.size, 3))
+    q = lie.matrix_to_quat_xyzw(k.world_R_body @ lie.so3_exp(np.radians(0.05) * rng.normal(size=(tc.size, 3))))
+    tr = tc + (rng.uniform(*delays, tc.size) if jitter else 0.001)
+    i = 0
+    while stalls and i < tc.size:
+        if rng.random() < 1.0 / 150.0:
+            end = tc[i] + rng.uniform(0.1, 0.27)
+            j = int(np.searchsorted(tc, end))
+            tr[i:j] = end + 1e-4 * np.arange(j - i)
+            i = j
+        else:
+            i += 1
+    for i in range(1, tr.size):  # delivered in order, 0.1 ms apart at least
+        tr[i] = max(tr[i], tr[i - 1] + 1e-4)
+    return sc, tc, tr, p, q

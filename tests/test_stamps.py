@@ -8,7 +8,7 @@ import json
 
 import numpy as np
 import pytest
-from fit_scenes import scene_errors
+from fit_scenes import received, scene_errors
 
 from splineimu import fit, lie
 from splineimu._kernels.stamps import assign_slots
@@ -17,32 +17,6 @@ from splineimu.scenes import make_scene
 from splineimu.stamps import _monotone, retime_stamps
 
 RATE = 50.0
-
-
-def received(name, seed, duration=30.0, stalls=True, jitter=True, delays=(0.001, 0.010)):
-    """``(scene, capture times, receive times, positions, quat_xyzw)``: 7% of the frames dropped,
-    1-10 ms delivery delays, and (``stalls``) one frame in 150 held 100-270 ms with the frames
-    queued behind it, delivered 0.1 ms apart; 0.3 mm / 0.05 deg pose noise."""
-    sc = make_scene(name, duration_s=duration)
-    rng = np.random.default_rng(seed)
-    tc = np.arange(0.0, duration, 1.0 / RATE)
-    tc = tc[rng.random(tc.size) > 0.07]
-    k = sc.kinematics(tc)
-    p = k.position_world + 3e-4 * rng.normal(size=(tc.size, 3))
-    q = lie.matrix_to_quat_xyzw(k.world_R_body @ lie.so3_exp(np.radians(0.05) * rng.normal(size=(tc.size, 3))))
-    tr = tc + (rng.uniform(*delays, tc.size) if jitter else 0.001)
-    i = 0
-    while stalls and i < tc.size:
-        if rng.random() < 1.0 / 150.0:
-            end = tc[i] + rng.uniform(0.1, 0.27)
-            j = int(np.searchsorted(tc, end))
-            tr[i:j] = end + 1e-4 * np.arange(j - i)
-            i = j
-        else:
-            i += 1
-    for i in range(1, tr.size):  # delivered in order, 0.1 ms apart at least
-        tr[i] = max(tr[i], tr[i - 1] + 1e-4)
-    return sc, tc, tr, p, q
 
 
 def slots_right(rt, tc, tr):
