@@ -11,10 +11,17 @@ as motion (ov_data's KAIST VIO mocap, 50 Hz: finite-difference accelerations of 
 1. **Period**: candidates are the one (within 2% of the median interval) at which the stamps'
    phases concentrate most, refined over growing spans, the nominal rate (whole hertz), and each
    refined as the line through the least delays of blocks of the record (a clock drift against
-   the logger's clock is part of the period). Each is assigned (step 3, one pass), and the one
-   on which the poses move most smoothly is kept (mean pseudo-Huber norm of their second
-   differences in common units), if more smoothly than at the stamps as given. Receive timers
-   coarser than the jitter blur the phases (KAIST VIO: phase coherence 0.01-0.64).
+   the logger's clock is part of the period). Stalls queue poses that arrive at one phase
+   whatever the period, and pull the median interval short of it (100 Hz with 1-10 ms delays:
+   9.71 ms); so the phases of the poses delivered in turn are searched too, from 0.6 of the mean
+   interval (the period times one plus the share of dropped frames) to just above it, and their
+   three strongest peaks over the whole record (of the eight strongest over its first 1500
+   periods) that reach half the strongest's concentration and lie within :data:`WHOLE_HZ` of a
+   whole number of hertz add their period, that rate and its refinement. Each is assigned
+   (step 3, one pass), and the one on which the poses move most smoothly is kept (mean
+   pseudo-Huber norm of their second differences in common units), if more smoothly than at
+   the stamps as given. Receive timers coarser than the jitter blur the phases (KAIST VIO:
+   phase coherence 0.01-0.64).
 2. **Offset**: the earliest phase, so that no delay is negative; the new stamps are the capture
    times plus the least delivery delay (a constant the IMU-to-pose time offset absorbs).
 3. **Slots**: the latest slot at or before each stamp, made strictly increasing (a burst's poses
@@ -32,6 +39,15 @@ mocap (11 recordings at 50 Hz, no IMU truth): fit residual 2.6-190 mm -> 0.06-2.
 warnings 21 -> 1-6 (circle: 36 -> 0.21 mm, position knots 2.5 s -> 43 ms); the clock at 20.0000
 ms on 9 of them (on 7 with the least median delay instead of the smoothest motion), 20.0016 and
 20.0031 ms on two; four told doubtful (:data:`DOUBTFUL_DELAY`).
+
+Delays spread over a whole period or more leave the phases nearly uniform (coherence 0.05-0.11):
+synthetic records at 50, 100, 120 and 200 Hz (ellipse and flips, seeds 0-2, 60 s) put every
+slot right (99.7% at least) on 30 of 36, against 20 of 36 with the median interval's window
+alone; the six left, 1-20 ms delays at 50 Hz (two of six: a period 0.4% short) and 1-10 ms at
+200 Hz (four of six: the period right, 69-97% of the slots), are told doubtful.
+Cost: about S^2 terms per pose and candidate clock (S = 0.3 s / the period): a minute at 50 Hz
+0.7 s of CPU, 5x the fit of the same poses; ten minutes at 200 Hz 47 s, 42x
+(benchmarks/results/stamps.md).
 
 Where it fails: stamps without a steady capture clock (variable-rate input) are refused; a stall
 at the very end of a record cannot be told from a late start of the following frames (no later
@@ -60,6 +76,9 @@ MAX_TABLE_BYTES = 256e6
 #: KAIST VIO's mocap 7 of 11 recordings leave median delays of 0.51-0.58 of a period, four 0.73-1.02
 #: (two on 20.0000 ms with their phases spread over the whole period, two on 20.0016 and 20.0031 ms).
 DOUBTFUL_DELAY = 0.65
+#: Clock periods read from the phases of the poses delivered in turn are tried where they lie
+#: within this share of a whole number of hertz (a capture clock's nominal rate and its drift).
+WHOLE_HZ = 1e-3
 
 
 @dataclass
@@ -104,23 +123,29 @@ class Retiming:
                 f"{self.dropped_frames} dropped frames{doubt}")
 
 
-def _period(t, h0):
-    """The clock period near h0 at which the phases of stamps t (seconds from the first)
-    concentrate most, and that concentration: searched over the first 1500 periods, then refined
-    over spans 4x as long."""
+def _periods(t, h0, down=0.02, up=0.02, k=3, first=8):
+    """The clock periods in [(1 - down) h0, (1 + up) h0] at which the phases of stamps t (seconds
+    from the first) concentrate most, with their concentrations: the ``first`` highest peaks of
+    that concentration over the first 1500 periods, each refined over spans 4x as long (a
+    spurious peak fades), the ``k`` highest of them."""
     span = float(t[-1])
     T = min(span, 1500.0 * h0)
-    lo, hi, n = 0.98 * h0, 1.02 * h0, int(np.ceil(0.04 * h0 * 8 * T / h0**2)) + 1
-    while True:
-        tt = t[t <= T]
-        hs = np.linspace(lo, hi, n)
-        z = np.array([abs(np.exp(2j * np.pi * tt / hh).mean()) for hh in hs])
-        h = float(hs[int(np.argmax(z))])
-        if T >= span:
-            return h, float(z.max())
-        T = min(4.0 * T, span)
-        step = hs[1] - hs[0]
-        lo, hi, n = h - 2 * step, h + 2 * step, 41
+    hs = np.linspace((1 - down) * h0, (1 + up) * h0, int(np.ceil((down + up) * h0 * 8 * T / h0**2)) + 1)
+    tt = t[t <= T]
+    z = np.array([abs(np.exp(2j * np.pi * tt / hh).mean()) for hh in hs])
+    peaks = [i for i in range(hs.size) if z[i] >= z[max(i - 1, 0)] and z[i] >= z[min(i + 1, hs.size - 1)]]
+    out = []
+    for i in sorted(peaks, key=lambda i: -z[i])[:first]:
+        h, step, Ti = float(hs[i]), float(hs[1] - hs[0]) if hs.size > 1 else 0.0, T
+        zi = float(z[i])
+        while Ti < span:
+            Ti = min(4.0 * Ti, span)
+            tt = t[t <= Ti]
+            grid = np.linspace(h - 2 * step, h + 2 * step, 41)
+            zz = np.array([abs(np.exp(2j * np.pi * tt / hh).mean()) for hh in grid])
+            h, zi, step = float(grid[int(np.argmax(zz))]), float(zz.max()), float(grid[1] - grid[0])
+        out.append((h, zi))
+    return sorted(out, key=lambda x: -x[1])[:k]
 
 
 def _monotone(m):
@@ -188,22 +213,37 @@ def retime_stamps(t_ns, positions, quat_xyzw, max_delay_s: float = 0.3, path: st
     steps = rotation_increments(lie.quat_xyzw_to_matrix(np.asarray(quat_xyzw, dtype=np.float64)))
     Y = np.ascontiguousarray(np.hstack([np.asarray(positions, dtype=np.float64),
                                         np.vstack([np.zeros((1, 3)), np.cumsum(steps, axis=0)])]))
-    h_coh, _ = _period(t, h0)
-    tried = []
+    h_coh = _periods(t, h0, k=1, first=1)[0][0]
     h_nom = 1.0 / max(round(1.0 / h0), 1)  # the nominal rate, a whole number of hertz
-    cands = (h_coh, h_nom, _envelope_period(t, h0), _envelope_period(t, h_coh), _envelope_period(t, h_nom))
+    cands = [h_coh, h_nom, _envelope_period(t, h0), _envelope_period(t, h_coh), _envelope_period(t, h_nom)]
     # the delay's states: up to max_delay_s, within MAX_TABLE_BYTES for the traceback
-    S = int(min(np.ceil(max_delay_s / min(cands)) + 1, np.sqrt(MAX_TABLE_BYTES / t.size), 127))
-    if S < 3:
+    S_max = int(min(np.sqrt(MAX_TABLE_BYTES / t.size), 127))
+    if S_max < 3:
         raise InputError(f"re-timing {t.size} poses needs more memory than {MAX_TABLE_BYTES / 1e6:.0f} MB: re-time "
                          "the recording in parts", path=path)
-    back = np.zeros((t.size, S, S), dtype=np.int8)
+    S_of = dict.fromkeys((round(h, 12) for h in cands), int(min(np.ceil(max_delay_s / min(cands)) + 1, S_max)))
+    # the median interval is short of the period where stalls queue many poses (100 Hz, 1-10 ms
+    # delays: 9.72 ms): the phases of the poses delivered in turn (a queue arrives at one phase,
+    # whatever the period) concentrate at the period too, which lies below the mean interval (the
+    # period times one plus the share of dropped frames) and above 0.6 of it (its half); of
+    # their peaks, those within WHOLE_HZ of a whole number of hertz (a capture clock's rate)
+    h_mean = float(t[-1]) / (t.size - 1)
+    turn = np.r_[True, np.diff(t) > 0.25 * h_mean]
+    peaks = _periods(t[turn], h_mean, down=0.4)
+    for h, z in peaks:
+        nom = 1.0 / max(round(1.0 / h), 1)
+        if (z >= 0.5 * peaks[0][1] and abs(h / nom - 1.0) < WHOLE_HZ
+                and min(abs(nom / c - 1.0) for c in cands) > WHOLE_HZ):
+            cands += [h, nom, _envelope_period(t, nom)]
+            S_of.update((round(x, 12), int(min(np.ceil(max_delay_s / x) + 1, S_max))) for x in cands[-3:])
+    back = np.zeros((t.size, max(S_of.values()), max(S_of.values())), dtype=np.int8)
 
     def assign(h, m, n):
-        s, cost = _kst.assign_slots(m, Y, _scales(Y, n * h), h, S, DELAY_COST, back)
+        s, cost = _kst.assign_slots(m, Y, _scales(Y, n * h), h, S_of[h], DELAY_COST, back)
         return m - s if np.isfinite(cost) else None
 
-    for h in sorted({round(x, 12) for x in cands}):
+    tried = []
+    for h in sorted(S_of):
         T0 = _offset(t, h)
         latest = np.floor((t - T0) / h).astype(np.int64)
         m = _monotone(latest)
