@@ -65,6 +65,7 @@ import numpy as np
 from . import lie
 from ._kernels import stamps as _kst
 from .errors import InputError
+from .io.progress import progress_bar
 from .spline.signals import rotation_increments
 
 #: Cost of one period of delay against the smoothness of the motion (pseudo-Huber units).
@@ -76,6 +77,9 @@ MAX_TABLE_BYTES = 256e6
 #: KAIST VIO's mocap 7 of 11 recordings leave median delays of 0.51-0.58 of a period, four 0.73-1.02
 #: (two on 20.0000 ms with their phases spread over the whole period, two on 20.0016 and 20.0031 ms).
 DOUBTFUL_DELAY = 0.65
+#: Re-timing this many poses or more shows a progress bar (where stderr is a terminal): ten
+#: minutes at 100 Hz take 11 s of CPU.
+PROGRESS_MIN_POSES = 20_000
 #: Clock periods read from the phases of the poses delivered in turn are tried where they lie
 #: within this share of a whole number of hertz (a capture clock's nominal rate and its drift).
 WHOLE_HZ = 1e-3
@@ -199,10 +203,12 @@ def _roughness(Y, t, units):
                      for j in range(2)))
 
 
-def retime_stamps(t_ns, positions, quat_xyzw, max_delay_s: float = 0.3, path: str | None = None) -> Retiming:
+def retime_stamps(t_ns, positions, quat_xyzw, max_delay_s: float = 0.3, path: str | None = None,
+                  progress: bool | None = None) -> Retiming:
     """Stamps ``t_ns`` (N,) of poses (positions (N, 3), ``quat_xyzw`` (N, 4)) logged at receive
     time, put on the capture clock (module docstring). Raises :class:`~splineimu.errors.InputError`
-    (naming ``path``) where the stamps hold no steady clock."""
+    (naming ``path``) where the stamps hold no steady clock. ``progress``: a bar over the clocks
+    tried (None: from :data:`PROGRESS_MIN_POSES` poses on, where stderr is a terminal)."""
     t_ns = np.asarray(t_ns, dtype=np.int64)
     if t_ns.size < 16:
         raise InputError(f"re-timing needs 16 poses or more, got {t_ns.size}", path=path)
@@ -243,6 +249,8 @@ def retime_stamps(t_ns, positions, quat_xyzw, max_delay_s: float = 0.3, path: st
         return m - s if np.isfinite(cost) else None
 
     tried = []
+    bar = progress_bar(len(S_of) + 1, progress if progress is not None or t.size >= PROGRESS_MIN_POSES else False,
+                       0, " clocks", "re-timing")
     for h in sorted(S_of):
         T0 = _offset(t, h)
         latest = np.floor((t - T0) / h).astype(np.int64)
@@ -250,6 +258,8 @@ def retime_stamps(t_ns, positions, quat_xyzw, max_delay_s: float = 0.3, path: st
         n = assign(h, m, m)
         if n is not None:
             tried.append((h, T0, m, n, latest))
+        if bar is not None:
+            bar.update(1)
     # the clock on which the poses move most smoothly (mean pseudo-Huber norm of their second
     # differences in common units), if more smoothly than at the stamps as given
     times = [t] + [T0 + n * h for h, T0, _, n, _ in tried]
@@ -257,11 +267,15 @@ def retime_stamps(t_ns, positions, quat_xyzw, max_delay_s: float = 0.3, path: st
     rough = [_roughness(Y, x, units) for x in times]
     ok = [(rough[1 + i], i) for i in range(len(tried)) if rough[1 + i] < rough[0]]
     if not ok:
+        if bar is not None:
+            bar.close()
         raise InputError("the stamps hold no steady capture clock to re-time onto: on none found do the poses "
                          "move more smoothly than at the stamps as given (variable-rate poses, not receive-time "
                          "jitter)", path=path)
     h, T0, m, n, latest = tried[min(ok)[1]]
     n = assign(h, m, n)  # again, in the units of the first pass's slots
+    if bar is not None:
+        bar.close()
     ph = np.exp(2j * np.pi * t / h)
     new = T0 + n.astype(np.float64) * h
     return Retiming(t_ns=t_ns[0] + np.round(new * 1e9).astype(np.int64), period_s=h,
