@@ -65,7 +65,6 @@ import numpy as np
 from . import lie
 from ._kernels import stamps as _kst
 from .errors import InputError
-from .io.progress import progress_bar
 from .spline.signals import rotation_increments
 
 #: Cost of one period of delay against the smoothness of the motion (pseudo-Huber units).
@@ -131,25 +130,28 @@ def _periods(t, h0, down=0.02, up=0.02, k=3, first=8):
     """The clock periods in [(1 - down) h0, (1 + up) h0] at which the phases of stamps t (seconds
     from the first) concentrate most, with their concentrations: the ``first`` highest peaks of
     that concentration over the first 1500 periods, each refined over spans 4x as long (a
-    spurious peak fades), the ``k`` highest of them."""
+    spurious peak fades), the ``k`` highest of them (best first; fewer where the others faded)."""
     span = float(t[-1])
     T = min(span, 1500.0 * h0)
     hs = np.linspace((1 - down) * h0, (1 + up) * h0, int(np.ceil((down + up) * h0 * 8 * T / h0**2)) + 1)
     tt = t[t <= T]
     z = np.array([abs(np.exp(2j * np.pi * tt / hh).mean()) for hh in hs])
     peaks = [i for i in range(hs.size) if z[i] >= z[max(i - 1, 0)] and z[i] >= z[min(i + 1, hs.size - 1)]]
-    out = []
-    for i in sorted(peaks, key=lambda i: -z[i])[:first]:
-        h, step, Ti = float(hs[i]), float(hs[1] - hs[0]) if hs.size > 1 else 0.0, T
-        zi = float(z[i])
-        while Ti < span:
-            Ti = min(4.0 * Ti, span)
-            tt = t[t <= Ti]
+    step = float(hs[1] - hs[0]) if hs.size > 1 else 0.0
+    # (period, concentration, grid step) of each peak, refined span after span; those under a
+    # quarter of the strongest's concentration are dropped on the way (a spurious peak's halves
+    # with each 4x span, a clock's stays)
+    out = [(float(hs[i]), float(z[i]), step) for i in sorted(peaks, key=lambda i: -z[i])[:first]]
+    while T < span:
+        T = min(4.0 * T, span)
+        tt = t[t <= T]
+        for j, (h, _, step) in enumerate(out):
             grid = np.linspace(h - 2 * step, h + 2 * step, 41)
             zz = np.array([abs(np.exp(2j * np.pi * tt / hh).mean()) for hh in grid])
-            h, zi, step = float(grid[int(np.argmax(zz))]), float(zz.max()), float(grid[1] - grid[0])
-        out.append((h, zi))
-    return sorted(out, key=lambda x: -x[1])[:k]
+            out[j] = (float(grid[int(np.argmax(zz))]), float(zz.max()), float(grid[1] - grid[0]))
+        out.sort(key=lambda x: -x[1])
+        out = [x for x in out if x[1] >= 0.25 * out[0][1]]
+    return [(h, zi) for h, zi, _ in out[:k]]
 
 
 def _monotone(m):
@@ -249,8 +251,12 @@ def retime_stamps(t_ns, positions, quat_xyzw, max_delay_s: float = 0.3, path: st
         return m - s if np.isfinite(cost) else None
 
     tried = []
-    bar = progress_bar(len(S_of) + 1, progress if progress is not None or t.size >= PROGRESS_MIN_POSES else False,
-                       0, " clocks", "re-timing")
+    bar = None
+    if progress or (progress is None and t.size >= PROGRESS_MIN_POSES):
+        from tqdm import tqdm
+
+        bar = tqdm(total=len(S_of) + 1, unit=" clocks", desc="re-timing", leave=False,
+                   disable=None if progress is None else False)
     for h in sorted(S_of):
         T0 = _offset(t, h)
         latest = np.floor((t - T0) / h).astype(np.int64)
