@@ -45,9 +45,9 @@ synthetic records at 50, 100, 120 and 200 Hz (ellipse and flips, seeds 0-2, 60 s
 slot right (99.7% at least) on 30 of 36, against 20 of 36 with the median interval's window
 alone; the six left, 1-20 ms delays at 50 Hz (two of six: a period 0.4% short) and 1-10 ms at
 200 Hz (four of six: the period right, 69-97% of the slots), are told doubtful.
-Cost: about S^2 terms per pose and candidate clock (S = 0.3 s / the period): a minute at 50 Hz
-0.7 s of CPU, 5x the fit of the same poses; ten minutes at 200 Hz 47 s, 42x
-(benchmarks/results/stamps.md).
+Cost: about S^2 terms per pose and candidate clock (S = 0.3 s / the period), the clocks ranked
+on :data:`RANK_POSES` of the poses: a minute at 50 Hz 0.5 s of CPU, 6x the fit of the same
+poses; ten minutes at 200 Hz 18 s, 15x (benchmarks/results/stamps.md).
 
 Where it fails: stamps without a steady capture clock (variable-rate input) are refused; a stall
 at the very end of a record cannot be told from a late start of the following frames (no later
@@ -79,6 +79,10 @@ DOUBTFUL_DELAY = 0.65
 #: Re-timing this many poses or more shows a progress bar (where stderr is a terminal): ten
 #: minutes at 100 Hz take 11 s of CPU.
 PROGRESS_MIN_POSES = 20_000
+#: The candidate clocks are ranked on this many poses, the first and the last half of them (the
+#: one kept then assigns the whole record): ten minutes at 200 Hz 47 -> 18 s of CPU, slots right
+#: 99.97% either way (benchmarks/bench_stamps.py).
+RANK_POSES = 20_000
 #: Clock periods read from the phases of the poses delivered in turn are tried where they lie
 #: within this share of a whole number of hertz (a capture clock's nominal rate and its drift).
 WHOLE_HZ = 1e-3
@@ -246,8 +250,8 @@ def retime_stamps(t_ns, positions, quat_xyzw, max_delay_s: float = 0.3, path: st
             S_of.update((round(x, 12), int(min(np.ceil(max_delay_s / x) + 1, S_max))) for x in cands[-3:])
     back = np.zeros((t.size, max(S_of.values()), max(S_of.values())), dtype=np.int8)
 
-    def assign(h, m, n):
-        s, cost = _kst.assign_slots(m, Y, _scales(Y, n * h), h, S_of[h], DELAY_COST, back)
+    def assign(h, m, n, Yp=Y):
+        s, cost = _kst.assign_slots(m, Yp, _scales(Yp, n * h), h, S_of[h], DELAY_COST, back)
         return m - s if np.isfinite(cost) else None
 
     tried = []
@@ -255,33 +259,45 @@ def retime_stamps(t_ns, positions, quat_xyzw, max_delay_s: float = 0.3, path: st
     if progress or (progress is None and t.size >= PROGRESS_MIN_POSES):
         from tqdm import tqdm
 
-        bar = tqdm(total=len(S_of) + 1, unit=" clocks", desc="re-timing", leave=False,
+        bar = tqdm(total=len(S_of) + 1 + (t.size > RANK_POSES), unit=" clocks", desc="re-timing", leave=False,
                    disable=None if progress is None else False)
+    # the clocks are ranked on the first and the last RANK_POSES / 2 poses (a clock's drift shows
+    # over the whole span)
+    part = slice(None) if t.size <= RANK_POSES else np.r_[:RANK_POSES // 2, t.size - RANK_POSES // 2:t.size]
+    Yr = np.ascontiguousarray(Y[part])
     for h in sorted(S_of):
         T0 = _offset(t, h)
         latest = np.floor((t - T0) / h).astype(np.int64)
         m = _monotone(latest)
-        n = assign(h, m, m)
+        n = assign(h, m[part], m[part], Yr)
         if n is not None:
             tried.append((h, T0, m, n, latest))
         if bar is not None:
             bar.update(1)
     # the clock on which the poses move most smoothly (mean pseudo-Huber norm of their second
     # differences in common units), if more smoothly than at the stamps as given
-    times = [t] + [T0 + n * h for h, T0, _, n, _ in tried]
-    units = np.min([_scales(Y, x) for x in times], axis=0)
-    rough = [_roughness(Y, x, units) for x in times]
-    ok = [(rough[1 + i], i) for i in range(len(tried)) if rough[1 + i] < rough[0]]
-    if not ok:
-        if bar is not None:
-            bar.close()
+    times = [t[part]] + [T0 + n * h for h, T0, _, n, _ in tried]
+    units = np.min([_scales(Yr, x) for x in times], axis=0)
+    rough = [_roughness(Yr, x, units) for x in times]
+    ok = sorted((rough[1 + i], i) for i in range(len(tried)) if rough[1 + i] < rough[0])
+    for _, i in ok:
+        h, T0, m, n, latest = tried[i]
+        if t.size > RANK_POSES:  # the whole record on the clock kept (its delays may not fit in the states)
+            n = assign(h, m, m)
+            if bar is not None:
+                bar.update(1)
+            if n is None:
+                continue
+        n = assign(h, m, n)  # again, in the units of the first pass's slots
+        break
+    else:
+        n = None
+    if bar is not None:
+        bar.close()
+    if n is None:
         raise InputError("the stamps hold no steady capture clock to re-time onto: on none found do the poses "
                          "move more smoothly than at the stamps as given (variable-rate poses, not receive-time "
                          "jitter)", path=path)
-    h, T0, m, n, latest = tried[min(ok)[1]]
-    n = assign(h, m, n)  # again, in the units of the first pass's slots
-    if bar is not None:
-        bar.close()
     ph = np.exp(2j * np.pi * t / h)
     new = T0 + n.astype(np.float64) * h
     return Retiming(t_ns=t_ns[0] + np.round(new * 1e9).astype(np.int64), period_s=h,

@@ -54,6 +54,18 @@ def test_queued_stalls_do_not_hide_the_clock():
     assert slots_right(rt, tc, tr, rate) == 1.0 and not rt.doubtful
 
 
+def test_clocks_ranked_on_the_record_ends(monkeypatch):
+    """A record longer than RANK_POSES: the clocks are ranked on its first and last poses, the one
+    kept assigns all of it (every slot right, as when ranked on the whole record)."""
+    import splineimu.stamps as st
+
+    _, tc, tr, p, q = received("screw", 1)
+    monkeypatch.setattr(st, "RANK_POSES", 600)  # (12 s at each end; 8 s: a clock 0.25% long won)
+    rt = retime_stamps(np.round(tr * 1e9).astype(np.int64), p, q)
+    assert tc.size > 1000 and slots_right(rt, tc, tr) == 1.0
+    assert abs(rt.period_s * RATE - 1.0) < 3e-5
+
+
 def test_drops_alone_and_exact_stamps():
     """Frames dropped but no delay: the stamps come back as they were, the drops counted."""
     sc, tc, tr, p, q = received("ellipse", 3, stalls=False, jitter=False)
