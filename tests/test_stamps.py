@@ -54,6 +54,17 @@ def test_queued_stalls_do_not_hide_the_clock():
     assert slots_right(rt, tc, tr, rate) == 1.0 and not rt.doubtful
 
 
+def test_delays_over_whole_periods():
+    """200 Hz with 1-10 ms delays (up to two periods): the phases cover the whole circle, and the
+    offset read as the least phase around their circular mean forced 6% of the poses a slot early;
+    the phase after the widest gap puts every slot right (the re-timing is told doubtful: its
+    median delay is over a period)."""
+    rate = 200.0
+    _, tc, tr, p, q = received("ellipse", 0, rate=rate)
+    rt = retime_stamps(np.round(tr * 1e9).astype(np.int64), p, q)
+    assert slots_right(rt, tc, tr, rate) == 1.0 and rt.doubtful
+
+
 def test_clocks_ranked_on_the_record_ends(monkeypatch):
     """A record longer than RANK_POSES: the clocks are ranked on its first and last poses, the one
     kept assigns all of it (every slot right, as when ranked on the whole record)."""
