@@ -51,8 +51,8 @@ and the offset around the circular mean; the two left, 1-20 ms delays at 50 Hz (
 short, half the slots right), are told doubtful, and so are the four at 200 Hz with 1-10 ms
 (up to two periods) whose slots are right.
 Cost: about S^2 terms per pose and candidate clock (S = 0.3 s / the period), the clocks ranked
-on :data:`RANK_POSES` of the poses: a minute at 50 Hz 0.5 s of CPU, 6x the fit of the same
-poses; ten minutes at 200 Hz 18 s, 15x (benchmarks/results/stamps.md).
+on :data:`RANK_POSES` of the poses: a minute at 50 Hz 0.45-0.5 s of CPU, 5.5-6x the fit of the
+same poses; ten minutes at 200 Hz 17-18 s, 14-15x (benchmarks/results/stamps.md).
 
 Where it fails: stamps without a steady capture clock (variable-rate input) are refused; a stall
 at the very end of a record cannot be told from a late start of the following frames (no later
