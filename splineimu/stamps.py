@@ -134,6 +134,16 @@ class Retiming:
                 f"{self.dropped_frames} dropped frames{doubt}")
 
 
+def _coherence(t, h):
+    """Concentration (0-1) of the phases of stamps t on a clock of period h."""
+    return float(abs(np.exp(2j * np.pi * t / h).mean()))
+
+
+def _nominal(h):
+    """The period of the nearest whole number of hertz."""
+    return 1.0 / max(round(1.0 / h), 1)
+
+
 def _periods(t, h0, down=0.02, up=0.02, k=3, first=8):
     """The clock periods in [(1 - down) h0, (1 + up) h0] at which the phases of stamps t (seconds
     from the first) concentrate most, with their concentrations: the ``first`` highest peaks of
@@ -143,7 +153,7 @@ def _periods(t, h0, down=0.02, up=0.02, k=3, first=8):
     T = min(span, 1500.0 * h0)
     hs = np.linspace((1 - down) * h0, (1 + up) * h0, int(np.ceil((down + up) * h0 * 8 * T / h0**2)) + 1)
     tt = t[t <= T]
-    z = np.array([abs(np.exp(2j * np.pi * tt / hh).mean()) for hh in hs])
+    z = np.array([_coherence(tt, hh) for hh in hs])
     peaks = [i for i in range(hs.size) if z[i] >= z[max(i - 1, 0)] and z[i] >= z[min(i + 1, hs.size - 1)]]
     step = float(hs[1] - hs[0]) if hs.size > 1 else 0.0
     # (period, concentration, grid step) of each peak, refined span after span; those under a
@@ -155,7 +165,7 @@ def _periods(t, h0, down=0.02, up=0.02, k=3, first=8):
         tt = t[t <= T]
         for j, (h, _, step) in enumerate(out):
             grid = np.linspace(h - 2 * step, h + 2 * step, 41)
-            zz = np.array([abs(np.exp(2j * np.pi * tt / hh).mean()) for hh in grid])
+            zz = np.array([_coherence(tt, hh) for hh in grid])
             out[j] = (float(grid[int(np.argmax(zz))]), float(zz.max()), float(grid[1] - grid[0]))
         out.sort(key=lambda x: -x[1])
         out = [x for x in out if x[1] >= 0.25 * out[0][1]]
@@ -232,14 +242,18 @@ def retime_stamps(t_ns, positions, quat_xyzw, max_delay_s: float = 0.3, path: st
     Y = np.ascontiguousarray(np.hstack([np.asarray(positions, dtype=np.float64),
                                         np.vstack([np.zeros((1, 3)), np.cumsum(steps, axis=0)])]))
     h_coh = _periods(t, h0, k=1, first=1)[0][0]
-    h_nom = 1.0 / max(round(1.0 / h0), 1)  # the nominal rate, a whole number of hertz
+    h_nom = _nominal(h0)  # the nominal rate, a whole number of hertz
     cands = [h_coh, h_nom, _envelope_period(t, h0), _envelope_period(t, h_coh), _envelope_period(t, h_nom)]
     # the delay's states: up to max_delay_s, within MAX_TABLE_BYTES for the traceback
     S_max = int(min(np.sqrt(MAX_TABLE_BYTES / t.size), 127))
     if S_max < 3:
         raise InputError(f"re-timing {t.size} poses needs more memory than {MAX_TABLE_BYTES / 1e6:.0f} MB: re-time "
                          "the recording in parts", path=path)
-    S_of = dict.fromkeys((round(h, 12) for h in cands), int(min(np.ceil(max_delay_s / min(cands)) + 1, S_max)))
+
+    def states(h):  # delays up to max_delay_s on a clock of period h
+        return int(min(np.ceil(max_delay_s / h) + 1, S_max))
+
+    S_of = dict.fromkeys((round(h, 12) for h in cands), states(min(cands)))
     # the median interval is short of the period where stalls queue many poses (100 Hz, 1-10 ms
     # delays: 9.72 ms): the phases of the poses delivered in turn (a queue arrives at one phase,
     # whatever the period) concentrate at the period too, which lies below the mean interval (the
@@ -249,24 +263,27 @@ def retime_stamps(t_ns, positions, quat_xyzw, max_delay_s: float = 0.3, path: st
     turn = np.r_[True, np.diff(t) > 0.25 * h_mean]
     peaks = _periods(t[turn], h_mean, down=0.4)
     for h, z in peaks:
-        nom = 1.0 / max(round(1.0 / h), 1)
+        nom = _nominal(h)
         if (z >= 0.5 * peaks[0][1] and abs(h / nom - 1.0) < WHOLE_HZ
                 and min(abs(nom / c - 1.0) for c in cands) > WHOLE_HZ):
             cands += [h, nom, _envelope_period(t, nom)]
-            S_of.update((round(x, 12), int(min(np.ceil(max_delay_s / x) + 1, S_max))) for x in cands[-3:])
+            S_of.update((round(x, 12), states(x)) for x in cands[-3:])
     back = np.zeros((t.size, max(S_of.values()), max(S_of.values())), dtype=np.int8)
 
     def assign(h, m, n, Yp=Y):
         s, cost = _kst.assign_slots(m, Yp, _scales(Yp, n * h), h, S_of[h], DELAY_COST, back)
         return m - s if np.isfinite(cost) else None
 
-    tried = []
-    bar = None
-    if progress or (progress is None and t.size >= PROGRESS_MIN_POSES):
-        from tqdm import tqdm
+    from tqdm import tqdm
 
-        bar = tqdm(total=len(S_of) + 1 + (t.size > RANK_POSES), unit=" clocks", desc="re-timing", leave=False,
-                   disable=None if progress is None else False)
+    tried = []
+    # (progress None: shown from PROGRESS_MIN_POSES on, where stderr is a terminal; tqdm's disable=None)
+    if progress is None:
+        disable = True if t.size < PROGRESS_MIN_POSES else None
+    else:
+        disable = not progress
+    bar = tqdm(total=len(S_of) + 1 + (t.size > RANK_POSES), unit=" clocks", desc="re-timing", leave=False,
+               disable=disable)
     # the clocks are ranked on the first and the last RANK_POSES / 2 poses (a clock's drift shows
     # over the whole span)
     part = slice(None) if t.size <= RANK_POSES else np.r_[:RANK_POSES // 2, t.size - RANK_POSES // 2:t.size]
@@ -278,8 +295,7 @@ def retime_stamps(t_ns, positions, quat_xyzw, max_delay_s: float = 0.3, path: st
         n = assign(h, m[part], m[part], Yr)
         if n is not None:
             tried.append((h, T0, m, n, latest))
-        if bar is not None:
-            bar.update(1)
+        bar.update(1)
     # the clock on which the poses move most smoothly (mean pseudo-Huber norm of their second
     # differences in common units), if more smoothly than at the stamps as given
     times = [t[part]] + [T0 + n * h for h, T0, _, n, _ in tried]
@@ -290,22 +306,19 @@ def retime_stamps(t_ns, positions, quat_xyzw, max_delay_s: float = 0.3, path: st
         h, T0, m, n, latest = tried[i]
         if t.size > RANK_POSES:  # the whole record on the clock kept (its delays may not fit in the states)
             n = assign(h, m, m)
-            if bar is not None:
-                bar.update(1)
+            bar.update(1)
             if n is None:
                 continue
         n = assign(h, m, n)  # again, in the units of the first pass's slots
         break
     else:
         n = None
-    if bar is not None:
-        bar.close()
+    bar.close()
     if n is None:
         raise InputError("the stamps hold no steady capture clock to re-time onto: on none found do the poses "
                          "move more smoothly than at the stamps as given (variable-rate poses, not receive-time "
                          "jitter)", path=path)
-    ph = np.exp(2j * np.pi * t / h)
     new = T0 + n.astype(np.float64) * h
     return Retiming(t_ns=t_ns[0] + np.round(new * 1e9).astype(np.int64), period_s=h,
-                    coherence=float(abs(ph.mean())), dropped_frames=int(n[-1] - n[0] + 1 - n.size),
+                    coherence=_coherence(t, h), dropped_frames=int(n[-1] - n[0] + 1 - n.size),
                     moved=int(np.count_nonzero(n < latest)), delay_s=t - new)
