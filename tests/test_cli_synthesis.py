@@ -72,6 +72,37 @@ def test_from_tum_reproduces_the_scene(ellipse_tum, tmp_path, capsys):
     assert rep["spline"]["knot_spacing_source"] == "auto" and rep["spline"]["n_poses"] == 1201
 
 
+def test_position_grid_given_apart_from_the_rotation(ellipse_tum, tmp_path):
+    """--position-knot-spacing fixes the position grid while the rotation's is chosen (and
+    --knot-spacing with --position-knot-spacing auto the reverse), as the library's fit does."""
+    from splineimu import fit
+    from splineimu.io import read_tum
+
+    track = read_tum(ellipse_tum)
+    for flags, kw, source in (
+            (["--position-knot-spacing", 0.08, "--position-order", 4], {"position_knot_spacing_s": 0.08,
+                                                                        "position_order": 4},
+             "rotation auto, position given"),
+            (["--knot-spacing", 0.05, "--position-knot-spacing", "auto"], {"knot_spacing_s": 0.05,
+                                                                           "position_knot_spacing_s": "auto"},
+             "rotation given, position auto")):
+        out = tmp_path / source.replace(" ", "_").replace(",", "")
+        assert run_cli("from-tum", ellipse_tum, "-o", out, *flags) == 0
+        sp = json.loads((out / "report.json").read_text())["spline"]
+        _, want = fit(track, return_report=True, **kw)
+        assert sp["knot_spacing_source"] == source
+        assert (sp["order"], sp["knot_spacing_s"]) == (want.order, pytest.approx(want.knot_spacing_s, rel=1e-12))
+        assert (sp["position_order"], sp["position_knot_spacing_s"]) == (
+            want.position_order, pytest.approx(want.position_knot_spacing_s, rel=1e-12))
+        given = kw.get("position_knot_spacing_s"), kw.get("knot_spacing_s")
+        if given[0] == 0.08:
+            assert sp["position_knot_spacing_s"] == pytest.approx(0.08) and sp["position_order"] == 4
+            assert sp["knot_spacing_s"] != pytest.approx(0.08)
+        else:
+            assert sp["knot_spacing_s"] == pytest.approx(0.05)
+            assert sp["position_knot_spacing_s"] != pytest.approx(0.05)
+
+
 def test_same_seed_same_bytes_and_noise_model_file(ellipse_tum, tmp_path):
     outs = []
     for i, seed in enumerate((7, 7, 8)):

@@ -48,6 +48,8 @@ def test_examples_round_trip_through_the_command_line(examples, name):
     "           rotation_source: estimate}\n"
     "imu: {timestamps: imu0.csv, model: {accelerometer_random_walk: 2.0e-3}, extrinsic: {T_BS: "
     "[[0, -1, 0, 0.1], [1, 0, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]}}\nseed: 0\noutput: {dir: o}\n",
+    "motion:\n  poses: mocap.tum\n  spline: {order: 5, position_order: auto, position_knot_spacing_s: 0.04}\n"
+    "output: {dir: o}\n",
 ])
 def test_every_key_round_trips_through_the_command_line(tmp_path, text):
     f = tmp_path / "job.yaml"
@@ -56,6 +58,7 @@ def test_every_key_round_trips_through_the_command_line(tmp_path, text):
     argv = job.to_argv()
     every = ({"--t0-ns", "--param", "--rate", "--gravity", "--sampling", "--increments", "--tum", "--bag", "--plot",
               "--force"} if "circle" in text else
+             {"--order", "--position-order", "--position-knot-spacing"} if "mocap" in text else
              {"--max-gap", "--repeated-stamps", "--gaps", "--spline", "--order", "--knot-spacing", "--smoothness",
               "--keep-outliers", "--rotation-source", "--timestamps", "--imu", "--extrinsic", "--seed"})
     assert every <= set(argv), every - set(argv)
@@ -142,6 +145,8 @@ def test_bad_scene_files_name_file_line_and_key(tmp_path, capsys, text, line, ms
     (["scene", "static", "--duration", "0"], "`--duration` must be positive"),
     (["from-tum", "a.tum", "--order", "nine"], "`--order` must be an integer"),
     (["from-tum", "a.tum", "--knot-spacing", "-1"], "`--knot-spacing` must be positive"),
+    (["from-tum", "a.tum", "--position-knot-spacing", "0"], "`--position-knot-spacing` must be positive"),
+    (["from-tum", "a.tum", "--spline", "se3", "--position-order", "5"], "`--position-order` needs the split spline"),
 ])
 def test_flag_errors_name_the_flag(tmp_path, capsys, argv, flag):
     assert main(argv + ["-o", str(tmp_path / "o")]) == 1

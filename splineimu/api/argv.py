@@ -14,6 +14,7 @@ FLAGS = {
     "gravity": "--gravity", "sampling": "--sampling", "increments": "--increments", "seed": "--seed",
     "rostopic": "--rostopic", "bag_version": "--bag-version",
     "kind": "--spline", "order": "--order", "knot_spacing_s": "--knot-spacing", "smoothness": "--smoothness",
+    "position_order": "--position-order", "position_knot_spacing_s": "--position-knot-spacing",
     "keep_outliers": "--keep-outliers", "trim_ends_s": "--trim-ends", "rotation_source": "--rotation-source",
     "path": "POSES", "format": "COMMAND", "repeated_stamps": "--repeated-stamps", "max_gap_s": "--max-gap",
     "gaps": "--gaps", "retime_stamps": "--retime-stamps",
@@ -26,7 +27,8 @@ FLAGS = {
 }
 
 #: The fields of :class:`~splineimu.api.options.SplineOptions` a scene file or a command line gives.
-SPLINE_FIELDS = ("kind", "order", "knot_spacing_s", "smoothness", "keep_outliers", "trim_ends_s", "rotation_source")
+SPLINE_FIELDS = ("kind", "order", "knot_spacing_s", "position_order", "position_knot_spacing_s", "smoothness",
+                 "keep_outliers", "trim_ends_s", "rotation_source")
 
 
 def job_argv(job) -> list[str]:

@@ -302,6 +302,11 @@ class SplineOptions(_Checked):
     order : int or "auto"
         Spline order 3..8 (4 is cubic; 2 has no acceleration); ``"auto"``: the best predicted of 4, 5, 6.
     knot_spacing_s : float or "auto"
+        Of the rotation, and of the position unless ``position_knot_spacing_s`` is given.
+    position_order, position_knot_spacing_s : int / float or "auto", optional
+        The position grid's own settings (``kind="split"`` only): e.g. a fixed position spacing
+        where a ``motion_not_followed`` warning asks for a finer one, with the rotation's still
+        chosen. None (default): as the rotation's.
     smoothness : float, optional
         Relative weight of the smoothness penalty (the fit's default when None).
     keep_outliers : bool
@@ -321,6 +326,8 @@ class SplineOptions(_Checked):
     kind: str = "split"
     order: object = "auto"
     knot_spacing_s: object = "auto"
+    position_order: object = None
+    position_knot_spacing_s: object = None
     smoothness: float | None = None
     keep_outliers: bool = False
     trim_ends_s: object = 0.0
@@ -336,6 +343,16 @@ class SplineOptions(_Checked):
                                      "alone; give 3..8 (4 is cubic) or auto")
         name, kw = self._kw("knot_spacing_s")
         self.knot_spacing_s = _auto_or(self.knot_spacing_s, lambda v: positive_float(v, name, **kw))
+        if self.position_order is not None:
+            name, kw = self._kw("position_order")
+            self.position_order = _auto_or(self.position_order, lambda v: int_in_range(v, name, 3, 8, **kw))
+        if self.position_knot_spacing_s is not None:
+            name, kw = self._kw("position_knot_spacing_s")
+            self.position_knot_spacing_s = _auto_or(self.position_knot_spacing_s,
+                                                    lambda v: positive_float(v, name, **kw))
+        for fld in ("position_order", "position_knot_spacing_s"):
+            if self.kind == "se3" and getattr(self, fld) is not None:
+                raise self._err(fld, "needs the split spline: the se3 spline has one grid for rotation and position")
         if self.smoothness is not None:
             name, kw = self._kw("smoothness")
             self.smoothness = nonnegative_float(self.smoothness, name, **kw)
@@ -343,6 +360,18 @@ class SplineOptions(_Checked):
         self.rotation_source = self._choice("rotation_source", ("auto", "estimate", "measurement"))
         name, kw = self._kw("trim_ends_s")
         self.trim_ends_s = _auto_or(self.trim_ends_s, lambda v: nonnegative_float(v, name, **kw))
+
+    def fit_kwargs(self) -> dict:
+        """The keyword arguments of :func:`splineimu.fit` these options give."""
+        kw = {"kind": self.kind, "order": self.order, "knot_spacing_s": self.knot_spacing_s,
+              "reject_outliers": not self.keep_outliers,
+              # auto: a ground truth that carries IMU biases (EuRoC, vicon2gt) is an estimator's output
+              # that fused that IMU, and its rotation's detail is motion (fit's estimated_rotation)
+              "estimated_rotation": {"auto": "auto", "estimate": True, "measurement": False}[self.rotation_source]}
+        for fld in ("position_order", "position_knot_spacing_s", "smoothness"):  # None: the fit's default
+            if getattr(self, fld) is not None:
+                kw[fld] = getattr(self, fld)
+        return kw
 
     def trim_s(self, fit_report) -> float:
         """The time [s] left out at each end of a piece fitted as ``fit_report`` says."""

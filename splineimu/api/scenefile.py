@@ -10,7 +10,8 @@
       # poses: mocap.tum          # ... or a pose file (TUM, or EuRoC csv with format: euroc)
       # format: tum
       # spline: {kind: split, order: auto, knot_spacing_s: auto, smoothness: 1e-10, keep_outliers: false,
-      #          trim_ends_s: 0, rotation_source: auto}   # auto | estimate | measurement
+      #          trim_ends_s: 0, rotation_source: auto,   # auto | estimate | measurement
+      #          position_order: auto, position_knot_spacing_s: auto}  # (default: as the rotation's)
       # gaps: error               # error | bridge | split
       # max_gap_s: 0.5
       # repeated_stamps: error    # error | first

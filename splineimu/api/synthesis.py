@@ -499,14 +499,8 @@ def _fit(job, track, log, retime_doubt=None):
     from ..spline.fit import fit
 
     sp = job.motion.spline
-    smooth = {} if sp.smoothness is None else {"smoothness": sp.smoothness}  # None: the fit's default
-    # auto: a ground truth that carries IMU biases (EuRoC, vicon2gt) is an estimator's output that
-    # fused that IMU, and its rotation's detail is motion (fit's estimated_rotation)
-    estimated = {"auto": "auto", "estimate": True, "measurement": False}[sp.rotation_source]
     try:
-        spl, rep = fit(track, kind=sp.kind, order=sp.order, knot_spacing_s=sp.knot_spacing_s, **smooth,
-                       reject_outliers=not sp.keep_outliers, estimated_rotation=estimated,
-                       progress=track.t_ns.size > 100_000, return_report=True)
+        spl, rep = fit(track, **sp.fit_kwargs(), progress=track.t_ns.size > 100_000, return_report=True)
     except InputError as exc:  # the fit's refusals (a turn of 90 deg or more between poses) name the file
         if exc.path is not None or job.motion.path is None:
             raise

@@ -8,34 +8,7 @@ own defaults apply, exactly as for a scene file.
 from __future__ import annotations
 
 import argparse
-import contextlib
-import gc
-import importlib
 import sys
-
-#: What a pose-file command (from-tum, from-euroc) runs, imported by :func:`start_up`.
-POSE_JOB_MODULES = ("splineimu.api.synthesis", "splineimu.io.poses", "splineimu.spline.fit", "splineimu.pipeline")
-
-
-@contextlib.contextmanager
-def start_up(*modules):
-    """Build a command's job and import ``modules`` with Python's cyclic garbage collector paused.
-
-    numpy, numba and splineimu leave some 10^5 long-lived objects behind on import, and the
-    collector's passes over them while they are made (0.03-0.035 s of CPU in a ``from-tum``
-    run, measured) free nothing. They are moved to the permanent generation afterwards
-    (``gc.freeze``): later collections traverse only what the job itself allocates.
-    """
-    enabled = gc.isenabled()
-    gc.disable()
-    try:
-        yield
-        for name in modules:
-            importlib.import_module(name)
-    finally:
-        gc.freeze()
-        if enabled:
-            gc.enable()
 
 
 def add_output_args(p: argparse.ArgumentParser):
@@ -96,9 +69,15 @@ def add_pose_args(p: argparse.ArgumentParser, fmt_help: str):
     g.add_argument("--spline", choices=["split", "se3"],
                    help="split: R3 x SO3 (default, decoupled); se3: Lovegrove et al.'s cumulative SE3")
     g.add_argument("--order", metavar="K",
-                   help="spline order 3 .. 8 (4 is cubic), or auto (default: the best predicted of 4, 5, 6)")
+                   help="spline order 3 .. 8 (4 is cubic), or auto (default: the best predicted of 4, 5, 6); "
+                        "of the rotation, and of the position unless --position-order is given")
     g.add_argument("--knot-spacing", metavar="S",
-                   help="knot spacing in seconds, or auto (default: minimizes the predicted IMU error)")
+                   help="knot spacing in seconds, or auto (default: minimizes the predicted IMU error); of the "
+                        "rotation, and of the position unless --position-knot-spacing is given")
+    g.add_argument("--position-order", metavar="K", help="the position's own spline order (split spline), or auto")
+    g.add_argument("--position-knot-spacing", metavar="S",
+                   help="the position's own knot spacing in seconds (split spline), or auto; e.g. "
+                        "--position-knot-spacing 0.02 with the rotation's still chosen")
     g.add_argument("--smoothness", type=float, metavar="MU",
                    help="relative weight of the smoothness penalty (default 1e-10; gaps get 1e-3)")
     g.add_argument("--rotation-source", choices=["auto", "estimate", "measurement"],
@@ -125,9 +104,13 @@ def add_pose_args(p: argparse.ArgumentParser, fmt_help: str):
     add_output_args(p)
 
 
-def _given(args, **fields) -> dict:
-    """``{field: value}`` of the flags given (``fields`` maps option field -> argparse dest)."""
-    return {f: getattr(args, dest) for f, dest in fields.items() if getattr(args, dest, None) is not None}
+def _given(args, *fields, group="") -> dict:
+    """``{field: value}`` of the option ``fields`` whose flags were given; a field's flag is
+    ``FLAGS[group + field]`` (``knot_spacing_s``: ``--knot-spacing``, parsed as ``knot_spacing``)."""
+    from ..api.argv import FLAGS
+
+    dest = {f: FLAGS[group + f].lstrip("-").replace("-", "_") for f in fields}
+    return {f: getattr(args, d) for f, d in dest.items() if getattr(args, d, None) is not None}
 
 
 def _params(items) -> dict:
@@ -150,6 +133,7 @@ def options_from_args(args, motion: str):
     """
     from pathlib import Path
 
+    from ..api.argv import SPLINE_FIELDS
     from ..api.options import FlagOrigin, ImuOptions, OutputOptions, PosesInput, SceneInput, SplineOptions, SynthesisJob
     from ..errors import ConfigError
 
@@ -158,25 +142,18 @@ def options_from_args(args, motion: str):
         raise ConfigError("--rate and --timestamps are both given: the samples are at the file's stamps; drop --rate",
                           option="--rate")
     if motion == "scene":
-        source = SceneInput(args.name, **_given(args, duration_s="duration", t0_ns="t0_ns"),
-                            params=_params(args.param), origin=o)
+        source = SceneInput(args.name, **_given(args, "duration_s", "t0_ns"), params=_params(args.param), origin=o)
     else:
-        spline = SplineOptions(**_given(args, kind="spline", order="order", knot_spacing_s="knot_spacing",
-                                        smoothness="smoothness", keep_outliers="keep_outliers",
-                                        trim_ends_s="trim_ends", rotation_source="rotation_source"), origin=o)
-        source = PosesInput(args.poses, motion, **_given(args, repeated_stamps="repeated_stamps",
-                                                         retime_stamps="retime_stamps", max_gap_s="max_gap",
-                                                         gaps="gaps"), spline=spline, origin=o)
+        spline = SplineOptions(**_given(args, *SPLINE_FIELDS), origin=o)
+        source = PosesInput(args.poses, motion, **_given(args, "repeated_stamps", "retime_stamps", "max_gap_s", "gaps"),
+                            spline=spline, origin=o)
         if args.out is None:
             args.out = Path(args.poses).stem + "_imu"
-    imu = ImuOptions(**_given(args, rate_hz="rate", timestamps="timestamps", model="imu", extrinsic="extrinsic",
-                              gravity="gravity", sampling="sampling", increments="increments", seed="seed",
-                              vibration="vibration", rostopic="rostopic"),
-                     timing=_given(args, time_offset_s="time_offset", clock_drift_ppm="clock_drift_ppm",
-                                   stamp_noise_s="stamp_noise", drop_probability="drop_probability",
-                                   drop_burst_s="drop_burst") or None, origin=o)
-    output = OutputOptions(**_given(args, dir="out", force="force", bag="bag", plot="plot", tum="tum",
-                                    bag_version="bag_version"), origin=o)
+    imu = ImuOptions(**_given(args, "rate_hz", "timestamps", "model", "extrinsic", "gravity", "sampling", "increments",
+                              "seed", "vibration", "rostopic"),
+                     timing=_given(args, "time_offset_s", "clock_drift_ppm", "stamp_noise_s", "drop_probability",
+                                   "drop_burst_s", group="timing.") or None, origin=o)
+    output = OutputOptions(**_given(args, "dir", "force", "bag", "plot", "tum", "bag_version"), origin=o)
     return SynthesisJob(source, imu, output)
 
 

@@ -26,7 +26,8 @@ def add_arguments(p):
 
 
 def run(args) -> int:
-    from ._common import POSE_JOB_MODULES, options_from_args, run_synthesis, start_up
+    from ._common import options_from_args, run_synthesis
+    from ._startup import POSE_JOB_MODULES, start_up
 
     with start_up(*POSE_JOB_MODULES):
         job = options_from_args(args, "tum")

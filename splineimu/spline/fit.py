@@ -265,7 +265,9 @@ def fit(t_s, positions=None, quat_xyzw=None, kind="split", order="auto", knot_sp
     chosen_on = slice(None)  # the poses the knot choice sees
     if "auto" in given:
         check_stamp_clusters(t)
-    source = "auto" if isinstance(knot_spacing_s, str) else "given"
+    # (a split spline's position grid may be given while its rotation grid is chosen, or the reverse)
+    source = {(True, True): "auto", (False, False): "given", (True, False): "rotation auto, position given",
+              (False, True): "rotation given, position auto"}[r_dt == "auto", p_dt == "auto"]
 
     # the choice reads the positions without the steps of their tracking (the fit follows them)
     P_chosen = without_steps(t, P, w, WARN_RESIDUAL_M) if "auto" in given else P
