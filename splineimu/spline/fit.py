@@ -30,7 +30,7 @@ import numpy as np
 from .. import lie
 from .._kernels import gauss_newton as _gn
 from ..errors import InputError, SplineImuError
-from .banded import DEFAULT_SMOOTHNESS, layout, shifted_layout
+from .banded import DEFAULT_SMOOTHNESS, layout, observable_layout, shifted_layout
 from .checks import (
     burst_warnings,
     check_rotation_steps,
@@ -272,6 +272,12 @@ def fit(t_s, positions=None, quat_xyzw=None, kind="split", order="auto", knot_sp
     # the choice reads the positions without the steps of their tracking (the fit follows them)
     P_chosen = without_steps(t, P, w, WARN_RESIDUAL_M) if "auto" in given else P
 
+    off_poses = {}  # the grids moved half a spacing off the poses (observable_layout)
+
+    def seen(lay, k, key):
+        lay, off_poses[key] = observable_layout(t, lay, k)
+        return lay
+
     def settings(wts, turn=MAX_CONTROL_TURN_RAD):
         """The knot choice (None if all is given), the (order, layout) of rotation and position,
         and the noise levels that weigh them."""
@@ -290,7 +296,8 @@ def fit(t_s, positions=None, quat_xyzw=None, kind="split", order="auto", knot_sp
             rdt = pdt = min(rdt, pdt)
             ro = po = max(ro, po)
         phase = ch["rotation"]["knot_phase"] if ch is not None else 0.0
-        lay_r, lay_p = shifted_layout(t[0], t[-1], rdt, ro, phase), layout(t[0], t[-1], pdt, po)
+        lay_r = seen(shifted_layout(t[0], t[-1], rdt, ro, phase), ro, "rotation")
+        lay_p = seen(layout(t[0], t[-1], pdt, po), po, "position")
         if kind == "se3" and ch is not None:  # the predictions moved to that spacing: the
             # interior's, and the noise it adds to the ends' and gaps' (and the end zones of the grid)
             for key, r in (("rotation", 1), ("position", 2)):
@@ -381,7 +388,7 @@ def fit(t_s, positions=None, quat_xyzw=None, kind="split", order="auto", knot_sp
         moved = _rotation_bias(choice, probs[0], Rc, max_iter, may_move=given[1] == "auto")
         if moved is not None:  # the SO3 spline's own bias moved the rotation: fit again there
             r_order, finer = moved
-            lay_r = layout(t[0], t[-1], finer, r_order)
+            lay_r = seen(layout(t[0], t[-1], finer, r_order), r_order, "rotation")
             probs = problems(probs[0].w)
             Rc, Pc, res_pos, res_rot, more, conv = _solve(probs, probs[0].initial_rotations(), kind, max_iter, tick,
                                                           smoothness)
@@ -424,6 +431,10 @@ def fit(t_s, positions=None, quat_xyzw=None, kind="split", order="auto", knot_sp
         dropped_poses=sorted(np.flatnonzero(early).tolist() + np.flatnonzero(~early)[dropped].tolist()),
         knot_choice=choice,
         sparse_control_points=probs[0].n_sparse, warnings=warnings, origin_ns=int(origin_ns),
+        notes=[f"{key if kind == 'split' else 'the'} grid moved half a knot spacing off the poses: at order "
+               f"{k} its knots on them leave its finest control mode unseen (the IMU between poses would follow "
+               "the pose noise)" for key, k in (("rotation", r_order), ("position", p_order))
+               if off_poses.get(key) and (kind == "split" or key == "rotation")],
     )
     spl.fit_report = report
     return (spl, report) if return_report else spl

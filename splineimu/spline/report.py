@@ -89,6 +89,7 @@ class FitReport:
         if self.predicted_gyro_rms_rad_s is not None:
             lines.append(f"predicted     gyro error ~{self.predicted_gyro_rms_rad_s:.2e} rad/s, accel error "
                          f"~{self.predicted_accel_rms_m_s2:.2e} m/s^2")
+        lines += [f"note          {n}" for n in self.notes]
         for w in self.warnings:
             lines.append(f"warning       {w.message}")
         return "\n".join(lines)
