@@ -146,6 +146,7 @@ def test_bad_scene_files_name_file_line_and_key(tmp_path, capsys, text, line, ms
     (["from-tum", "a.tum", "--order", "nine"], "`--order` must be an integer"),
     (["from-tum", "a.tum", "--knot-spacing", "-1"], "`--knot-spacing` must be positive"),
     (["from-tum", "a.tum", "--position-knot-spacing", "0"], "`--position-knot-spacing` must be positive"),
+    (["from-tum", "a.tum", "--position-order", "2"], "`--position-order` 2 (piecewise linear) has no acceleration"),
     (["from-tum", "a.tum", "--spline", "se3", "--position-order", "5"], "`--position-order` needs the split spline"),
 ])
 def test_flag_errors_name_the_flag(tmp_path, capsys, argv, flag):

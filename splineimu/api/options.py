@@ -336,16 +336,16 @@ class SplineOptions(_Checked):
 
     def __post_init__(self):
         self.kind = self._choice("kind", ("split", "se3"))
-        name, kw = self._kw("order")
-        self.order = _auto_or(self.order, lambda v: int_in_range(v, name, 2, 8, **kw))
-        if self.order == 2:  # the fit takes it; the IMU read gravity alone (ellipse: a_x 0 for -1.48 m/s^2)
-            raise self._err("order", "2 (piecewise linear) has no acceleration: the specific force would be gravity "
+        for fld in ("order", "position_order"):
+            if getattr(self, fld) is None:  # (position_order None: as the rotation's)
+                continue
+            name, kw = self._kw(fld)
+            setattr(self, fld, _auto_or(getattr(self, fld), lambda v: int_in_range(v, name, 2, 8, **kw)))
+            if getattr(self, fld) == 2:  # the fit takes it; the IMU read gravity alone (ellipse: a_x 0 for -1.48)
+                raise self._err(fld, "2 (piecewise linear) has no acceleration: the specific force would be gravity "
                                      "alone; give 3..8 (4 is cubic) or auto")
         name, kw = self._kw("knot_spacing_s")
         self.knot_spacing_s = _auto_or(self.knot_spacing_s, lambda v: positive_float(v, name, **kw))
-        if self.position_order is not None:
-            name, kw = self._kw("position_order")
-            self.position_order = _auto_or(self.position_order, lambda v: int_in_range(v, name, 3, 8, **kw))
         if self.position_knot_spacing_s is not None:
             name, kw = self._kw("position_knot_spacing_s")
             self.position_knot_spacing_s = _auto_or(self.position_knot_spacing_s,
