@@ -5,6 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from fit_scenes import scene_errors, scene_poses
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from splineimu import fit, lie
 from splineimu.spline.banded import grid_layout, layout, observable_layout, segments
@@ -58,3 +60,21 @@ def test_odd_orders_with_knots_at_the_pose_rate_follow_the_motion(kind):
     assert len(rep.notes) == (2 if kind == "split" else 1) and "half a knot spacing" in rep.notes[0]
     assert "note          " in rep.summary()
     assert fit(t, p, q, kind=kind, order=4, knot_spacing_s=0.05, return_report=True)[1].notes == []
+
+
+@settings(max_examples=60, deadline=None)
+@given(order=st.integers(3, 8), n=st.integers(20, 400), h=st.floats(1e-3, 1.0), frac=st.sampled_from([1.0, 0.5, 1 / 3]),
+       phase=st.floats(0.0, 1.0), jitter=st.floats(0.0, 1e-6))
+def test_observable_layout_keeps_the_grid_and_its_span(order, n, h, frac, phase, jitter):
+    """Whatever the poses' phase against the knots, the layout returned covers the poses with the
+    same spacing, and a moved one shows the alternating mode at the poses."""
+    rng = np.random.default_rng(n)
+    t = 12.3 + np.arange(n) * h + jitter * h * rng.uniform(-1, 1, n)
+    dt = frac * h
+    lay = grid_layout(t[0], t[-1], t[0] - phase * dt, dt, order)
+    out, moved = observable_layout(t, lay, order)
+    assert out[1] == lay[1] and out[0] <= t[0] + 1e-12 and out[0] + out[2] * out[1] >= t[-1] - 1e-9 * t[-1]
+    assert out[3] == out[2] + order - 1
+    if moved:
+        assert out[0] == pytest.approx(lay[0] - 0.5 * dt) or out[0] == pytest.approx(lay[0] + 0.5 * dt)
+        assert _alternating_rms(t, out, order) > _alternating_rms(t, lay, order)
