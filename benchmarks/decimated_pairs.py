@@ -13,8 +13,7 @@ tracking jumps; V2_01: its positions fitted at 104 ms while the 20 Hz ones read 
 
 DIR holds EuRoC ground-truth csv files, e.g. ``V1_03_difficult.csv`` (the 17-column
 state_groundtruth_estimate0 layout, as OpenVINS' ov_data/euroc_mav ships them); prints the
-table of ``real_pairs.py`` for each flight (default: every ``*.csv`` in DIR); its "real IMU"
-column is the reference.
+table of ``real_pairs.py`` for each flight (default: every ``*.csv`` in DIR).
 """
 
 from __future__ import annotations
@@ -53,7 +52,7 @@ def main(folder, names):
     for p in paths:
         pair = decimated_pair(p)
         results[pair.name] = evaluate(pair)
-    print(table(results))
+    print(table(results, truth="reference"))
 
 
 if __name__ == "__main__":
