@@ -272,10 +272,14 @@ def fit(t_s, positions=None, quat_xyzw=None, kind="split", order="auto", knot_sp
     # the choice reads the positions without the steps of their tracking (the fit follows them)
     P_chosen = without_steps(t, P, w, WARN_RESIDUAL_M) if "auto" in given else P
 
-    off_poses = {}  # the grids moved half a spacing off the poses (observable_layout)
+    off_poses = {}  # the order of each grid moved half a spacing off the poses (observable_layout)
 
     def seen(lay, k, key):
-        lay, off_poses[key] = observable_layout(t, lay, k)
+        lay, moved = observable_layout(t, lay, k)
+        if moved:
+            off_poses[key] = k
+        else:
+            off_poses.pop(key, None)
         return lay
 
     def settings(wts, turn=MAX_CONTROL_TURN_RAD):
@@ -297,7 +301,8 @@ def fit(t_s, positions=None, quat_xyzw=None, kind="split", order="auto", knot_sp
             ro = po = max(ro, po)
         phase = ch["rotation"]["knot_phase"] if ch is not None else 0.0
         lay_r = seen(shifted_layout(t[0], t[-1], rdt, ro, phase), ro, "rotation")
-        lay_p = seen(layout(t[0], t[-1], pdt, po), po, "position")
+        lay_p = layout(t[0], t[-1], pdt, po)
+        lay_p = seen(lay_p, po, "position") if kind == "split" else lay_p  # (se3: one grid, the rotation's)
         if kind == "se3" and ch is not None:  # the predictions moved to that spacing: the
             # interior's, and the noise it adds to the ends' and gaps' (and the end zones of the grid)
             for key, r in (("rotation", 1), ("position", 2)):
@@ -433,8 +438,7 @@ def fit(t_s, positions=None, quat_xyzw=None, kind="split", order="auto", knot_sp
         sparse_control_points=probs[0].n_sparse, warnings=warnings, origin_ns=int(origin_ns),
         notes=[f"{key if kind == 'split' else 'the'} grid moved half a knot spacing off the poses: at order "
                f"{k} its knots on them leave its finest control mode unseen (the IMU between poses would follow "
-               "the pose noise)" for key, k in (("rotation", r_order), ("position", p_order))
-               if off_poses.get(key) and (kind == "split" or key == "rotation")],
+               "the pose noise)" for key, k in off_poses.items()],
     )
     spl.fit_report = report
     return (spl, report) if return_report else spl
