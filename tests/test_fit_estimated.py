@@ -148,3 +148,45 @@ def test_motion_between_low_rate_estimated_poses_is_kept(amplitude):
     # what the poses cannot resolve is not in the prediction (0.28x and 2.9x the measured for
     # the two amplitudes): that is told
     assert "input_rate_low" in {w.code for w in rep.warnings}
+
+
+def test_positions_finer_than_their_poses_bridge_them_only_where_that_predicts_better():
+    """Positions fitted finer than their poses (motion-limited, 20 Hz): the segments between the
+    poses are set by the penalty alone. Bending least there (second differences, as a cubic
+    interpolating spline) is taken only where it predicts every 4th pose from the others better
+    than jerking least: not for exact fast motion, which it would smooth (11x the accel error of
+    this motion). The controls it would bridge are those between the poses, not a gap's."""
+    from splineimu.spline.banded import BRIDGE_SMOOTHNESS, layout
+    from splineimu.spline.core import Spline
+    from splineimu.spline.problem import _Problem
+
+    rate, dur = 20.0, 40.0
+    t = np.arange(0.0, dur + 1e-9, 1.0 / rate)
+    t = t[(t < 20.0) | (t > 21.0)]  # a 1 s gap (20 poses)
+    tables = [[(0.4, TWO_PI * f, ph) for f, ph in ((0.3, 0.1), (1.1, 1.0), (2.9, 0.4))],
+              [(0.3, TWO_PI * f, ph) for f, ph in ((0.5, 2.0), (1.7, 0.3), (3.7, 1.3))],
+              [(0.2, TWO_PI * f, ph) for f, ph in ((0.2, 0.7), (2.3, 1.9), (4.3, 0.6))]]
+    p = np.column_stack([sum_of_sines(t, tab)[0] for tab in tables])
+    q = lie.matrix_to_quat_xyzw(np.repeat(np.eye(3)[None], t.size, axis=0))
+    _, rep = fit(t, p, q, return_report=True, estimated_rotation=True)
+    pos = rep.knot_choice["position"]
+    assert pos["motion_limited"] and rep.position_knot_spacing_s < 1.0 / rate, rep.summary()
+    assert pos["bridge_smoothness"] == 0.0
+    k = rep.position_order
+    t0, dt, nseg, _ = layout(t[0], t[-1], rep.position_knot_spacing_s, k)
+    prob = _Problem(t, p, None, None, np.ones(t.size), k, t0, dt, nseg, 1e-10, 1.0, 1.0, bridge=BRIDGE_SMOOTHNESS)
+    tc = t0 + (np.arange(prob.n) - (k - 2) / 2.0) * dt  # the controls' centres
+    in_gap = (tc > 20.0 + k * dt) & (tc < 21.0 - k * dt)
+    assert in_gap.any() and prob.sparse[in_gap].all() and not prob.bridge[in_gap].any()
+    away = np.abs(tc - 20.5) > 0.5 + k * dt
+    assert prob.bridge[away].mean() > 0.9 and not prob.sparse[away].any()
+    # bridged so, this exact motion's accel would be 4.7 m/s^2 RMS off, not 0.41 (2-18 s)
+    te = np.arange(2.0, 18.0, 0.005)
+    a0 = np.column_stack([sum_of_sines(te, tab)[2] for tab in tables])
+    errs = []
+    for weight in (0.0, BRIDGE_SMOOTHNESS):
+        fold = _Problem(t, p, None, None, np.ones(t.size), k, t0, dt, nseg, 1e-10, 1.0, 1.0, bridge=weight)
+        spl = Spline.from_control_points(t0, dt, fold.solve_positions(), np.tile([0.0, 0.0, 0.0, 1.0], (fold.n, 1)),
+                                         order=k)
+        errs.append(float(np.sqrt(np.mean(np.sum((spl.acceleration_world(te) - a0) ** 2, axis=1)))))
+    assert 5.0 * errs[0] < errs[1], errs

@@ -21,6 +21,12 @@ DEFAULT_SMOOTHNESS = 1e-10
 #: stretches): there the curve is the smoothest bridge, instead of being steered by the noise of
 #: the few poses at the gap's borders.
 SPARSE_SMOOTHNESS = 1e-3
+#: Relative weight of the second-difference penalty on position controls whose segments hold no
+#: pose only because the knots are finer than the poses (:class:`splineimu.spline.problem._Problem`'s
+#: ``bridge``; where held-out poses are predicted better so, :func:`splineimu.spline.fit._bridge`):
+#: between the poses the curve bends least, as a cubic interpolating spline does, instead of
+#: jerking least.
+BRIDGE_SMOOTHNESS = 1e-2
 
 
 def solve_banded_scalar(Hs, rhs):

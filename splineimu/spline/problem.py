@@ -69,7 +69,8 @@ def _control_times(t0, dt, n, order):
 class _Problem:
     """One fit at a fixed knot layout."""
 
-    def __init__(self, t, P, R, q, w, order, t0, dt, nseg, smoothness, w_rot, w_pos, noise_rad=None):
+    def __init__(self, t, P, R, q, w, order, t0, dt, nseg, smoothness, w_rot, w_pos, noise_rad=None, bridge=0.0,
+                 bridge_span=None):
         self.t, self.P, self.R, self.q, self.w = t, P, R, q, w
         self.noise_rad = noise_rad
         self.step_tol = GN_STEP_TOL if noise_rad is None else max(GN_STEP_TOL, GN_STEP_REL * noise_rad)
@@ -87,6 +88,21 @@ class _Problem:
         seg = np.clip(self.seg, 0, nseg - 1)
         empty = (np.bincount(seg[w > 0], minlength=nseg) == 0).astype(np.float64)
         self.sparse = np.convolve(empty, np.ones(order))[: self.n] > 0
+        # with ``bridge`` > 0, the position controls of segments empty only because the knots are
+        # finer than the poses (poses at most ``bridge_span`` apart around them, by default 1.5
+        # median spacings: not a gap) take a second-difference penalty of that relative weight
+        # instead of the third-difference one
+        self.bridge = np.zeros(self.n, dtype=bool)
+        if bridge > 0 and empty.any():
+            tw = t[w > 0]
+            j = np.flatnonzero(empty)
+            i = np.clip(np.searchsorted(tw, t0 + j * dt), 1, tw.size - 1)
+            between = np.zeros(nseg)
+            span = 1.5 * float(np.median(np.diff(tw))) if bridge_span is None else bridge_span
+            between[j[tw[i] - tw[i - 1] <= span]] = 1.0
+            self.bridge = np.convolve(between, np.ones(order))[: self.n] > 0
+            self.sparse = np.convolve(empty - between, np.ones(order))[: self.n] > 0
+        self.bridge_weight = float(bridge)
         self.n_sparse = int(self.sparse.sum())
         # control rotations centred beyond the first or last pose (the data weigh them by the
         # tails of their basis functions: 1/120 at most for order 6)
@@ -106,6 +122,9 @@ class _Problem:
                                   Hs[None], rhs[None])
         r = min(3, k - 1)
         add_position_penalty(Hs, self._mu(r + 1) * self.w_pos, r)
+        if self.bridge.any():
+            rows = row_weights(self.bridge, 3) & ~row_weights(self.sparse, 3)
+            add_position_penalty(Hs, np.where(rows, self.bridge_weight * self.data_per_ctrl * self.w_pos, 0.0), 2)
         return solve_banded_scalar(Hs, rhs)
 
     def position_residuals(self, Pc):
