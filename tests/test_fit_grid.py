@@ -62,6 +62,29 @@ def test_odd_orders_with_knots_at_the_pose_rate_follow_the_motion(kind):
     assert fit(t, p, q, kind=kind, order=4, knot_spacing_s=0.05, return_report=True)[1].notes == []
 
 
+def test_a_chosen_rotation_grid_moved_off_the_poses_reports_where_it_sits(monkeypatch):
+    """The automatic choice's rotation grid (its ``knot_phase``: spacings before the first pose)
+    moved half a spacing off the poses: the report and summary give the grid the spline has."""
+    import splineimu.spline.fit as fit_module
+
+    real = fit_module.choose_knot_spacing
+
+    def odd_on_the_poses(*args, **kwargs):
+        ch = real(*args, **kwargs)
+        ch["rotation"].update(order=5, knot_spacing_s=0.05, knot_phase=0.0)
+        return ch
+
+    monkeypatch.setattr(fit_module, "choose_knot_spacing", odd_on_the_poses)
+    monkeypatch.setattr(fit_module, "_rotation_bias", lambda *a, **k: None)  # (keeps that grid)
+    sc, t, p, R = scene_poses("ellipse", "white", 20.0, 20.0, seed=1, scale=0.01)
+    t = _stamped_as_doubles(t)
+    spl, rep = fit(t, p, lie.matrix_to_quat_xyzw(R), return_report=True)
+    phase = rep.knot_choice["rotation"]["knot_phase"]
+    assert rep.order == 5 and any("rotation grid moved" in n for n in rep.notes), rep.notes
+    assert phase == pytest.approx(0.5, abs=1e-6) and spl.t0_s == pytest.approx(t[0] - phase * spl.dt_s, abs=1e-12)
+    assert f"from {phase * spl.dt_s * 1e3:.3f} ms before the first pose" in rep.summary()
+
+
 @settings(max_examples=60, deadline=None)
 @given(order=st.integers(3, 8), n=st.integers(20, 400), h=st.floats(1e-3, 1.0), frac=st.sampled_from([1.0, 0.5, 1 / 3]),
        phase=st.floats(0.0, 1.0), jitter=st.floats(0.0, 1e-6))

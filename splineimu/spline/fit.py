@@ -434,6 +434,8 @@ def fit(t_s, positions=None, quat_xyzw=None, kind="split", order="auto", knot_sp
             Rc, Pc, res_pos, res_rot, more, conv = _solve(probs, probs[0].initial_rotations(), kind, max_iter, tick,
                                                           smoothness)
             iters += more
+    if choice is not None and kind == "split" and "rotation" in off_poses:  # (where the grid now sits)
+        choice["rotation"]["knot_phase"] = round(float((t[0] - lay_r[0]) / lay_r[1]), 9)
     if kind == "se3":
         spl = Spline(lay_r[0], lay_r[1], Pc + offset, Rc, kind, r_order, origin_ns)
     else:
