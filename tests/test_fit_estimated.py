@@ -171,7 +171,7 @@ def test_positions_finer_than_their_poses_bridge_them_only_where_that_predicts_b
     _, rep = fit(t, p, q, return_report=True, estimated_rotation=True)
     pos = rep.knot_choice["position"]
     assert pos["motion_limited"] and rep.position_knot_spacing_s < 1.0 / rate, rep.summary()
-    assert pos["bridge_smoothness"] == 0.0
+    assert pos["bridge_smoothness"] == 0.0 and pos["bridge_heldout_ratio"] > 1.0 and rep.notes == []
     k = rep.position_order
     t0, dt, nseg, _ = layout(t[0], t[-1], rep.position_knot_spacing_s, k)
     prob = _Problem(t, p, None, None, np.ones(t.size), k, t0, dt, nseg, 1e-10, 1.0, 1.0, bridge=BRIDGE_SMOOTHNESS)

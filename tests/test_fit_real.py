@@ -69,6 +69,7 @@ def test_euroc_20hz_reestimated_ground_truth():
     # order 6 at 25.1 ms: below the pose spacing, bridged between the poses by least bending;
     # 1.017x jerking least)
     assert rep.knot_choice["position"]["bridge_smoothness"] > 0.0
+    assert rep.knot_choice["position"]["bridge_heldout_ratio"] < 0.99 and "bend least" in rep.summary()
     _check(rows, scipy_tol=1.01)
     # the 5-10 Hz octave still holds motion: the user is told that faster motion is missing, and
     # that the prediction took that octave for motion (held-out errors grow 2.2-2.6x with twice

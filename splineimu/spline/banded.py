@@ -23,7 +23,7 @@ DEFAULT_SMOOTHNESS = 1e-10
 SPARSE_SMOOTHNESS = 1e-3
 #: Relative weight of the second-difference penalty on position controls whose segments hold no
 #: pose only because the knots are finer than the poses (:class:`splineimu.spline.problem._Problem`'s
-#: ``bridge``; where held-out poses are predicted better so, :func:`splineimu.spline.fit._bridge`):
+#: ``bridge``; where held-out poses are predicted better so, :func:`splineimu.spline.problem.bridge_weight`):
 #: between the poses the curve bends least, as a cubic interpolating spline does, instead of
 #: jerking least.
 BRIDGE_SMOOTHNESS = 1e-2

@@ -19,7 +19,7 @@ factorization and the passes compute the gradient alone. The smoothness term pen
 third differences of the control positions and second differences of the rotation increments
 (Eilers & Marx's P-spline penalty); a tiny default keeps segments without data (gaps)
 well-posed and bridges them smoothly. Positions fitted finer than their poses may be bridged
-between the poses by second differences instead (:func:`_bridge`).
+between the poses by second differences instead (:func:`.problem.bridge_weight`).
 """
 
 from __future__ import annotations
@@ -31,7 +31,7 @@ import numpy as np
 from .. import lie
 from .._kernels import gauss_newton as _gn
 from ..errors import InputError, SplineImuError
-from .banded import BRIDGE_SMOOTHNESS, DEFAULT_SMOOTHNESS, layout, observable_layout, shifted_layout
+from .banded import DEFAULT_SMOOTHNESS, layout, observable_layout, shifted_layout
 from .checks import (
     burst_warnings,
     check_rotation_steps,
@@ -51,7 +51,7 @@ from .crossval import MAX_CV_POSES, _windows
 from .glitches import WARN_RESIDUAL_M, classify_residuals, dropped_warning, without_steps
 from .knots import choose_knot_spacing
 from .ladder import _LADDER
-from .problem import _Problem
+from .problem import _Problem, bridge_note, bridge_weight
 from .report import FitReport, FitWarning, prediction_warnings
 from .signals import MAX_CONTROL_TURN_RAD, anchor_block, max_rotation_spacing, rotation_increments
 from .surrogate import LINE_GYRO_FLOOR, LINE_SHARE, prediction_at_spacing, residual_lines
@@ -79,38 +79,6 @@ SO3_RIVALS = 2
 #: 100 Hz the choice is 4x or more and within the bars, and the 100 Hz poses alone read the
 #: six-position scene's noise as coloured (gyro 1.01 -> 1.65x the best).
 RESAMPLED_SPACINGS = 3.0
-
-
-def _bridge(choice, kind, position_dt, lay, t, P, w, order, sig_p):
-    """Relative weight of the second-difference bridge between the poses of the position fit
-    (:data:`.banded.BRIDGE_SMOOTHNESS`; 0: none), for positions read as motion-limited and chosen
-    finer than their poses, where the knots between the poses are set by the penalty alone:
-    bending least (as scipy's cubic interpolation does) or jerking least (the default). Bending
-    least keeps less of the top of the band, where motion aliased by the pose rate and an
-    estimator's error sit (EuRoC's 20 Hz vicon2gt against the real IMU: accel below 10 Hz
-    1.017x -> 1.006x scipy's), but smooths motion that is there (exact poses of fast motion at
-    20 Hz: 11x the error). Taken where it predicts every 4th pose from the others better (the
-    held-out fits bridge the two spacings around each left-out pose alike): V1_02 / V1_03 /
-    V2_02 / V2_03's vicon2gt (their 200 Hz poses every 10th), BROAD 02 every 14th pose; not
-    V2_01, BROAD 16, white-noise or exact motion."""
-    if choice is None or kind != "split" or position_dt != "auto" or not choice["position"]["motion_limited"]:
-        return 0.0
-    tw = t[w > 0]
-    h = float(np.median(np.diff(tw)))
-    if lay[1] >= h or tw.size < 64:
-        return 0.0
-    idx = np.arange(t.size)
-    scores = []
-    for weight in (0.0, BRIDGE_SMOOTHNESS):
-        total = 0.0
-        for f in range(4):
-            held = (idx % 4 == f) & (w > 0)
-            held[[0, -1]] = False
-            prob = _Problem(t, P, None, None, np.where(held, 0.0, w), order, *lay[:3], DEFAULT_SMOOTHNESS, 1.0,
-                            1.0 / sig_p**2, bridge=weight, bridge_span=2.5 * h)
-            total += float(np.sum(prob.position_residuals(prob.solve_positions())[held] ** 2))
-        scores.append(total)
-    return BRIDGE_SMOOTHNESS if scores[1] < scores[0] else 0.0
 
 
 def _lines_warning(t, res_rot, keep, dt, choice):
@@ -383,12 +351,14 @@ def fit(t_s, positions=None, quat_xyzw=None, kind="split", order="auto", knot_sp
 
     def problems(wts):
         args = (float(smoothness), 1.0 / sig_r**2, 1.0 / sig_p**2, None if choice is None else sig_r)
-        bridge = _bridge(choice, kind, given[3], lay_p, t, P, wts, p_order, sig_p)
+        bridge, held = bridge_weight(choice, kind, given[3], lay_p, t, P, wts, p_order, sig_p)
+        if choice is not None:  # (the report's knot choice says whether the poses were bridged so)
+            choice["position"]["bridge_heldout_ratio"] = held
         return (_Problem(t, P, R, q, wts, r_order, *lay_r[:3], *args),
                 _Problem(t, P, R, q, wts, p_order, *lay_p[:3], *args, bridge=bridge))
 
     probs = problems(w)
-    if choice is not None:  # (the report's knot choice says whether the poses were bridged so)
+    if choice is not None:
         choice["position"]["bridge_smoothness"] = probs[1].bridge_weight if probs[1].bridge.any() else 0.0
     Rc0 = probs[0].initial_rotations()
     gap_warnings += stamp_warnings(t, P, theta)
@@ -476,7 +446,7 @@ def fit(t_s, positions=None, quat_xyzw=None, kind="split", order="auto", knot_sp
         sparse_control_points=probs[0].n_sparse, warnings=warnings, origin_ns=int(origin_ns),
         notes=[f"{key if kind == 'split' else 'the'} grid moved half a knot spacing off the poses: at order "
                f"{k} its knots on them leave its finest control mode unseen (the IMU between poses would follow "
-               "the pose noise)" for key, k in off_poses.items()],
+               "the pose noise)" for key, k in off_poses.items()] + bridge_note(choice),
     )
     spl.fit_report = report
     return (spl, report) if return_report else spl
