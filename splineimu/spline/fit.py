@@ -351,7 +351,7 @@ def fit(t_s, positions=None, quat_xyzw=None, kind="split", order="auto", knot_sp
 
     def problems(wts):
         args = (float(smoothness), 1.0 / sig_r**2, 1.0 / sig_p**2, None if choice is None else sig_r)
-        bridge, held = bridge_weight(choice, kind, given[3], lay_p, t, P, wts, p_order, sig_p)
+        bridge, held = bridge_weight(choice, kind, given[3], lay_p, t, P, wts, p_order, sig_p, args[0])
         if choice is not None:  # (the report's knot choice says whether the poses were bridged so)
             choice["position"]["bridge_heldout_ratio"] = held
         return (_Problem(t, P, R, q, wts, r_order, *lay_r[:3], *args),

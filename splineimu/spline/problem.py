@@ -314,7 +314,7 @@ class _Problem:
         return x, res, it, converged
 
 
-def bridge_weight(choice, kind, position_dt, lay, t, P, w, order, sig_p):
+def bridge_weight(choice, kind, position_dt, lay, t, P, w, order, sig_p, smoothness=DEFAULT_SMOOTHNESS):
     """Relative weight of the second-difference bridge between the poses of the position fit
     (:data:`.banded.BRIDGE_SMOOTHNESS`; 0: none), for positions read as motion-limited and chosen
     finer than their poses, where the knots between the poses are set by the penalty alone:
@@ -324,8 +324,8 @@ def bridge_weight(choice, kind, position_dt, lay, t, P, w, order, sig_p):
     1.017x -> 1.006x scipy's), but smooths motion that is there (exact poses of fast motion at
     20 Hz: 11x the error). Taken where it predicts every 4th pose from the others better (the
     held-out fits bridge the two spacings around each left-out pose alike): V1_02 / V1_03 /
-    V2_02 / V2_03's vicon2gt (their 200 Hz poses every 10th), BROAD 02 every 14th pose; not
-    V2_01, BROAD 16, white-noise or exact motion. Returns the weight and the ratio of the two
+    V2_02 / V2_03's vicon2gt (their 200 Hz poses every 10th), 7 of 15 BROAD trials every 14th
+    pose; not V2_01, BROAD 16, white-noise or exact motion. Returns the weight and the ratio of the two
     held-out errors (bending least / jerking least; None where not tried)."""
     if choice is None or kind != "split" or position_dt != "auto" or not choice["position"]["motion_limited"]:
         return 0.0, None
@@ -340,7 +340,7 @@ def bridge_weight(choice, kind, position_dt, lay, t, P, w, order, sig_p):
         for f in range(4):
             held = (idx % 4 == f) & (w > 0)
             held[[0, -1]] = False
-            prob = _Problem(t, P, None, None, np.where(held, 0.0, w), order, *lay[:3], DEFAULT_SMOOTHNESS, 1.0,
+            prob = _Problem(t, P, None, None, np.where(held, 0.0, w), order, *lay[:3], smoothness, 1.0,
                             1.0 / sig_p**2, bridge=weight, bridge_span=2.5 * h)
             total += float(np.sum(prob.position_residuals(prob.solve_positions())[held] ** 2))
         scores.append(total)
