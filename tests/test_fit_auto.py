@@ -442,18 +442,29 @@ def test_low_rate_noise_under_slow_motion_is_smoothed():
     assert accel_error(spl) < 1.3 * best, (accel_error(spl), best, rep.summary())
 
 
-def test_knots_finer_than_noisy_poses_are_told():
+def test_knots_finer_than_noisy_poses_are_told(monkeypatch):
     """A car's positions at 20 Hz with 0.2 mm noise drawn at 10 Hz and interpolated: the top of
     the band reads as noise, yet the held-out fits interpolate it (knots 35 ms for poses every
     50 ms; accel ~0.15 m/s^2, ~9x the fixed fits at 0.2-0.6 s) and the prediction said 0.008,
     nothing told. The noise is read as for motion-limited input (in blocks as long as the first
-    pass's): predicted 0.07-0.08, up to 0.69-0.72 if noise, told (prediction_assumes_motion)."""
+    pass's): predicted 0.07-0.08, up to 0.69-0.72 if noise, told (prediction_assumes_motion).
+    That is the path where the half-rate interpolation is not seen (fast motion hides it, as
+    here with checks.noise_interpolated turned off); found, the knots are chosen on the poses
+    carrying the noise: 278 ms, accel 0.015 m/s^2 (predicted 0.014; fixed fits at 0.2 / 0.3 s
+    0.024 / 0.017)."""
+    import splineimu.spline.fit as fit_module
+
     t = np.arange(0.0, 60.0 + 1e-9, 0.05)
     te = np.arange(1.0, 59.0, 0.005)
     f0 = sine_positions(te, CAR_SINES, r=2) + [0.0, 0.0, 9.81]
     rng = np.random.default_rng(1)
     p = sine_positions(t, CAR_SINES) + noise("upsampled", t.size, 20.0, 2e-4, rng)
     q = np.tile([0.0, 0.0, 0.0, 1.0], (t.size, 1))
+    spl, rep = fit(t, p, q, return_report=True)
+    measured = float(np.sqrt(np.mean(np.sum((spl.imu(te)[1] - f0) ** 2, axis=1))))
+    assert [w.code for w in rep.warnings] == ["noise_interpolated"] and rep.position_knot_spacing_s > 0.2
+    assert measured < 0.02 and 1.0 / 3.0 < rep.predicted_accel_rms_m_s2 / measured < 3.0, (measured, rep.summary())
+    monkeypatch.setattr(fit_module, "noise_interpolated", lambda *a: None)
     spl, rep = fit(t, p, q, return_report=True)
     measured = float(np.sqrt(np.mean(np.sum((spl.imu(te)[1] - f0) ** 2, axis=1))))
     c = rep.knot_choice["position"]

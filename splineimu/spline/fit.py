@@ -39,6 +39,7 @@ from .checks import (
     held_poses,
     input_warnings,
     interpolated_poses,
+    noise_interpolated,
     resolve_setting,
     rotation_flips,
     singular_message,
@@ -323,6 +324,10 @@ def fit(t_s, positions=None, quat_xyzw=None, kind="split", order="auto", knot_sp
 
     choice, r_order, lay_r, p_order, lay_p, (sig_r, sig_p) = settings(w)
     resampled = interpolated_poses(t, P, theta) if choice is not None else None
+    noise_only = False  # (the noise interpolated, the motion not)
+    if resampled is None and choice is not None:
+        resampled = noise_interpolated(t, P, theta)
+        noise_only = resampled is not None
     if resampled is not None:
         m, between = resampled
         h = float(np.median(np.diff(t)))
@@ -330,13 +335,21 @@ def fit(t_s, positions=None, quat_xyzw=None, kind="split", order="auto", knot_sp
         if auto and min(auto) < RESAMPLED_SPACINGS * m * h:  # (a given spacing is fitted as given)
             # knots that close to the poses the others were interpolated from bend at them: the
             # held-out fits took the interpolation for motion. Chosen and fitted without those
+            w_all = w
             w = np.where(between, 0.0, w)
             chosen_on = np.flatnonzero(~between)
             choice, r_order, lay_r, p_order, lay_p, (sig_r, sig_p) = settings(w)
+            if noise_only:  # (the poses between hold the motion too: fitted, at the knots chosen without them)
+                w = w_all
+            nb = np.count_nonzero(between)
             gap_warnings.append(FitWarning(
-                "poses_interpolated", f"{np.count_nonzero(between)} of {t.size} poses lie on the straight line through "
+                "noise_interpolated", f"the pose noise of {nb} of {t.size} poses is interpolated from their "
+                f"neighbours' (noise drawn at {1.0 / (m * h):.3g} Hz and resampled to {1.0 / h:.3g} Hz?): the knots "
+                f"are chosen on the other {t.size - nb}, which show that noise as it is, and the fit follows all "
+                "poses") if noise_only else FitWarning(
+                "poses_interpolated", f"{nb} of {t.size} poses lie on the straight line through "
                 f"their neighbours (a trajectory resampled from {1.0 / (m * h):.3g} Hz to {1.0 / h:.3g} Hz?): the "
-                f"fit follows the other {t.size - np.count_nonzero(between)}, and no motion above "
+                f"fit follows the other {t.size - nb}, and no motion above "
                 f"{0.5 / (m * h):.3g} Hz is in the input"))
 
     bar = None
