@@ -262,6 +262,23 @@ _INTERPOLATION_FACTORS = (5, 4, 3, 2)
 _JUDGED_POSES = 24_000
 
 
+def _evenly_spaced(t):
+    """The median spacing, whether each spacing is within 1% of it, and whether each pose has
+    such spacings on both sides (the ends: not)."""
+    dt = np.diff(t)
+    h = float(np.median(dt))
+    uniform = np.abs(dt - h) <= 0.01 * h
+    ok = np.zeros(t.size, dtype=bool)
+    ok[1:-1] = uniform[:-1] & uniform[1:]
+    return h, uniform, ok
+
+
+def _middle(n):
+    """The first index and the slice of the middle :data:`_JUDGED_POSES` of ``n`` poses."""
+    a = max((n - _JUDGED_POSES) // 2, 0)
+    return a, slice(a, min(a + _JUDGED_POSES, n))
+
+
 def interpolated_poses(t, P, theta):
     """Poses that lie on the straight line (or geodesic) through their neighbours, every m-th
     pose carrying the data: ``(m, mask)`` of those poses, or None.
@@ -284,11 +301,7 @@ def interpolated_poses(t, P, theta):
     n = t.size
     if n < 64:
         return None
-    dt = np.diff(t)
-    h = float(np.median(dt))
-    uniform = np.abs(dt - h) <= 0.01 * h
-    ok = np.zeros(n, dtype=bool)
-    ok[1:-1] = uniform[:-1] & uniform[1:]
+    _, uniform, ok = _evenly_spaced(t)
 
     def second(Y):  # squared second differences (0 at the ends)
         e = np.zeros(Y.shape[0])
@@ -300,8 +313,7 @@ def interpolated_poses(t, P, theta):
 
     # judged on a stretch of _JUDGED_POSES in the middle (an hour at 200 Hz took 0.3 s), then
     # confirmed on all of the input (the phase of the poses carrying the data holds throughout)
-    a = max((n - _JUDGED_POSES) // 2, 0)
-    part = slice(a, min(a + _JUDGED_POSES, n))
+    a, part = _middle(n)
     judged = [(second(Y[part]), (64.0 * np.finfo(float).eps * max(float(np.max(np.abs(Y))), 1.0)) ** 2)
               for Y in (P, theta)]
     for m in _INTERPOLATION_FACTORS:
@@ -355,14 +367,10 @@ def noise_interpolated(t, P, theta):
     n = t.size
     if n < 64:
         return None
-    a = max((n - _JUDGED_POSES) // 2, 0)
-    part = slice(a, min(a + _JUDGED_POSES, n))
-    tp = t[part]
-    dt = np.diff(tp)
-    h = float(np.median(dt))
-    uniform = np.abs(dt - h) <= 0.01 * h
+    a, part = _middle(n)
+    _, uniform, between_uniform = _evenly_spaced(t)
     # poses i whose ten spacings i-5 .. i+5 are uniform
-    ok = np.convolve(uniform.astype(np.float64), np.ones(10), mode="valid") > 9.5  # window starts at i - 5
+    ok = np.convolve(uniform[a: part.stop - 1].astype(np.float64), np.ones(10), mode="valid") > 9.5  # from i - 5
     idx = np.arange(5, 5 + ok.size)
     data = set()
     for Y in (P[part], theta[part]):
@@ -380,10 +388,7 @@ def noise_interpolated(t, P, theta):
             data.add((a + int(np.argmax(miss))) % 2)
     if len(data) != 1:
         return None
-    dt_all = np.diff(t)
-    ok_all = np.zeros(n, dtype=bool)
-    ok_all[1:-1] = (np.abs(dt_all[:-1] - h) <= 0.01 * h) & (np.abs(dt_all[1:] - h) <= 0.01 * h)
-    return 2, ok_all & (np.arange(n) % 2 != data.pop())
+    return 2, between_uniform & (np.arange(n) % 2 != data.pop())
 
 
 def _diff_noise(X):

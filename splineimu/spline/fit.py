@@ -365,14 +365,13 @@ def fit(t_s, positions=None, quat_xyzw=None, kind="split", order="auto", knot_sp
     def problems(wts):
         args = (float(smoothness), 1.0 / sig_r**2, 1.0 / sig_p**2, None if choice is None else sig_r)
         bridge, held = bridge_weight(choice, kind, given[3], lay_p, t, P, wts, p_order, sig_p, args[0])
+        pos = _Problem(t, P, R, q, wts, p_order, *lay_p[:3], *args, bridge=bridge)
         if choice is not None:  # (the report's knot choice says whether the poses were bridged so)
-            choice["position"]["bridge_heldout_ratio"] = held
-        return (_Problem(t, P, R, q, wts, r_order, *lay_r[:3], *args),
-                _Problem(t, P, R, q, wts, p_order, *lay_p[:3], *args, bridge=bridge))
+            choice["position"].update(bridge_smoothness=pos.bridge_weight if pos.bridge.any() else 0.0,
+                                      bridge_heldout_ratio=held)
+        return _Problem(t, P, R, q, wts, r_order, *lay_r[:3], *args), pos
 
     probs = problems(w)
-    if choice is not None:
-        choice["position"]["bridge_smoothness"] = probs[1].bridge_weight if probs[1].bridge.any() else 0.0
     Rc0 = probs[0].initial_rotations()
     gap_warnings += stamp_warnings(t, P, theta)
     dropped = np.zeros(t.size, dtype=bool)
