@@ -8,7 +8,8 @@ the errors of a fixed setting are rough in the spacing (the knots' phase against
 the six-position and rate-table scenes, +-15%), so the best of a grid is partly luck, and one
 seed says little about the margin to a bar.
 
-Per case: 60 s (``--duration``) of poses at ``--rate`` with 1 mm / 0.1 deg noise (``--scale`` times), the
+Per case: 60 s (``--duration``) of poses at ``--rate`` with 1 mm / 0.1 deg noise (``--scale`` times; the
+angle's ``--angle-scale`` times where given), the
 automatic fit, and every setting of a fixed grid (orders 4-6 x 19 spacings 5 ms-2.56 s, one
 spacing for rotation and position, as benchmarks/heldout_motions.py); errors are RMS over
 [1 s, end - 1 s] at 200 Hz against the scene's exact gyro and specific force. The grid's errors do
@@ -44,15 +45,15 @@ BARS = {"white": 1.15, "ar1": 1.3, "upsampled": 1.3}
 
 def case(args):
     """One row (dict): auto / best fixed per quantity, predicted / measured, choice, warnings."""
-    name, kind, seed, rate, scale, cache, duration = args
+    name, kind, seed, rate, scale, cache, duration, angle_scale = args
     os.environ.setdefault("NUMBA_NUM_THREADS", "1")
     from fit_scenes import FIXED_GRID, fixed_grid_errors, scene_errors, scene_poses
 
     from splineimu import fit, lie
 
-    sc, t, p, R = scene_poses(name, kind, duration, rate, seed, scale)
+    sc, t, p, R = scene_poses(name, kind, duration, rate, seed, scale, angle_scale)
     q = lie.matrix_to_quat_xyzw(R)
-    span = "" if duration == DURATION_S else f"_{duration:g}s"
+    span = ("" if duration == DURATION_S else f"_{duration:g}s") + ("" if angle_scale is None else f"_a{angle_scale:g}")
     path = None if cache is None else Path(cache) / f"{name}_{kind}_{seed}_{rate:g}_{scale:g}{span}.npy"
     grid = fixed_grid_errors(sc, t, p, q, duration, path)
     spl, rep = fit(t, p, q, return_report=True)
@@ -88,15 +89,18 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     case_arguments(ap)
     ap.add_argument("--scale", type=float, default=1.0, help="pose noise in units of 1 mm / 0.1 deg (default 1)")
+    ap.add_argument("--angle-scale", type=float, default=None,
+                    help="angle noise in units of 0.1 deg (default: --scale)")
     ap.add_argument("--duration", type=float, default=DURATION_S, help="seconds of poses (default 60)")
     ap.add_argument("--jobs", type=int, default=1, help="worker processes (default 1)")
     ap.add_argument("--cache", default=None, help="folder keeping the fixed grid's errors between runs")
     ap.add_argument("--json", default=None, help="also append the rows to this file (JSON lines)")
     args = ap.parse_args(argv)
-    jobs = [(s, k, seed, args.rate, args.scale, args.cache, args.duration) for seed in _seeds(args.seeds)
-            for s in args.scenes for k in args.kinds]
+    jobs = [(s, k, seed, args.rate, args.scale, args.cache, args.duration, args.angle_scale)
+            for seed in _seeds(args.seeds) for s in args.scenes for k in args.kinds]
     keys = ["gyro", "accel", "pred_gyro", "pred_accel", "rotation", "position", "best_gyro", "best_accel", "warnings"]
-    print(f"{args.rate:g} Hz, {args.scale:g} x (1 mm / 0.1 deg) pose noise, {args.duration:g} s; "
+    angle = args.scale if args.angle_scale is None else args.angle_scale
+    print(f"{args.rate:g} Hz, {args.scale:g} mm / {0.1 * angle:g} deg pose noise, {args.duration:g} s; "
           "auto / best fixed per quantity\n")
     print("| case | " + " | ".join(keys) + " | |\n|" + " --- |" * (len(keys) + 2))
     rows = []

@@ -19,15 +19,17 @@ def scene(duration_s):
     return _SCENES[duration_s]
 
 
-def scene_poses(name, kind, duration_s, rate_hz=200.0, seed=0, scale=1.0):
+def scene_poses(name, kind, duration_s, rate_hz=200.0, seed=0, scale=1.0, angle_scale=None):
     """``(scene, t, positions, world_R_body)``: a named scene sampled at ``rate_hz`` with pose noise
-    of ``kind`` (``scale`` x 1 mm / 0.1 deg; the positions' noise drawn first)."""
+    of ``kind`` (``scale`` x 1 mm / ``angle_scale`` (default ``scale``) x 0.1 deg; the positions'
+    noise drawn first)."""
     sc = make_scene(name, duration_s=duration_s)
     t = np.arange(0.0, duration_s + 1e-9, 1.0 / rate_hz)
     k = sc.kinematics(t)
     rng = np.random.default_rng(seed)
     p = k.position_world + noise(kind, t.size, rate_hz, POS_NOISE_M * scale, rng)
-    R = k.world_R_body @ lie.so3_exp(noise(kind, t.size, rate_hz, ANGLE_NOISE_RAD * scale, rng))
+    angle = ANGLE_NOISE_RAD * (scale if angle_scale is None else angle_scale)
+    R = k.world_R_body @ lie.so3_exp(noise(kind, t.size, rate_hz, angle, rng))
     return sc, t, p, R
 
 
