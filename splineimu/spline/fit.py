@@ -54,7 +54,7 @@ from .knots import choose_knot_spacing
 from .ladder import _LADDER
 from .problem import _Problem, bridge_note, bridge_weight
 from .report import FitReport, FitWarning, prediction_warnings
-from .signals import MAX_CONTROL_TURN_RAD, anchor_block, max_rotation_spacing, rotation_increments
+from .signals import MAX_CONTROL_TURN_RAD, max_rotation_spacing, rotation_increments
 from .surrogate import LINE_GYRO_FLOOR, LINE_SHARE, prediction_at_spacing, residual_lines
 
 #: Poses (the middle ones) on which the rotation spline's bias is checked (:func:`_rotation_bias`).
@@ -484,7 +484,8 @@ def _rotation_bias(choice, rot, Rc_fit, max_iter, may_move=False):
     of those 360, 3 for the worse (ellipse AR(1) at 100 Hz 0.99 -> 1.26x)."""
     c = choice["rotation"]
     k, dt = rot.order, c["knot_spacing_s"]
-    excess = _so3_excess(rot, k, dt, Rc_fit, max_iter)
+    block = c.get("anchor_poses", 1)
+    excess = _so3_excess(rot, k, dt, Rc_fit, max_iter, block)
     pred = c["predicted_rms"]
     if excess is None or not excess > 0:
         return None
@@ -508,7 +509,7 @@ def _rotation_bias(choice, rot, Rc_fit, max_iter, may_move=False):
                          and not at(r, dt)),
                         key=lambda r: r["predicted_rms"])[:SO3_RIVALS]
         for r in rivals:
-            e = _so3_excess(rot, r["order"], r["knot_spacing_s"], None, max_iter)
+            e = _so3_excess(rot, r["order"], r["knot_spacing_s"], None, max_iter, block)
             total = float(np.sqrt(r["predicted_rms"] ** 2 + max(e if e is not None else np.inf, 0.0)))
             if total < best:
                 best, row = total, r
@@ -522,13 +523,13 @@ def _rotation_bias(choice, rot, Rc_fit, max_iter, may_move=False):
     return row["order"], dt_f
 
 
-def _so3_excess(rot, k, dt, Rc_fit, max_iter):
+def _so3_excess(rot, k, dt, Rc_fit, max_iter, block=1):
     """The SO3 spline's gyro bias^2 beyond the R3 proxy's at order k, spacing dt (see
     :func:`_rotation_bias`), on the middle poses; None where it cannot be measured."""
     n = min(rot.t.size, MAX_CV_POSES, max(BIAS_CHECK_POSES, int(40 * dt / np.median(np.diff(rot.t)))))
     sl = slice((rot.t.size - n) // 2, (rot.t.size - n) // 2 + n)
     t, w = rot.t[sl], rot.w[sl]
-    (wd,) = _windows(t, rotation_increments(rot.R[sl], anchor_block(t)), w, True)
+    (wd,) = _windows(t, rotation_increments(rot.R[sl], block), w, True)
     idx = wd.scored_index
     if idx.size < 2 or (t[-1] - t[0]) / dt < 3 * k:
         return

@@ -563,7 +563,8 @@ def choose_knot_spacing(t, P, R, w=None, rotation_order="auto", position_order="
     w = np.ones(t.size) if w is None else np.asarray(w, dtype=np.float64)
     ro = ORDERS if rotation_order == "auto" else (int(rotation_order),)
     po = ORDERS if position_order == "auto" else (int(position_order),)
-    X, turn = rotation_increments(R, anchor_block(t)), max_rotation_spacing(t, R, max_turn_rad)
+    block = anchor_block(t, R)
+    X, turn = rotation_increments(R, block), max_rotation_spacing(t, R, max_turn_rad)
     rot = choose_signal(t, X, w, 1, ro, rotation_dt, turn, increments=True, as_motion=bool(estimated_rotation),
                         grid_phase=grid_phase)
     rot["estimated"] = bool(estimated_rotation)
@@ -580,6 +581,7 @@ def choose_knot_spacing(t, P, R, w=None, rotation_order="auto", position_order="
         read = {key: rot[key] for key in ("order", "knot_spacing_s", "predicted_rms")}
         rot = choose_signal(t, X, w, 1, ro, None, turn, increments=True, as_motion=True, grid_phase=grid_phase)
         rot["estimated"], rot["read_as_noise"] = False, read
+    rot["anchor_poses"] = block  # (the SO3 bias check develops its rotations alike)
     # an orientation error dtheta (isotropic) turns the specific force f by f x dtheta: RMS
     # sqrt(2/3) |f| |dtheta|, with |f| ~ g (slow motion, where it is the accelerometer's main error)
     tilt = float(np.sqrt(2.0 / 3.0) * GRAVITY_M_S2 * rot["value_rms"])

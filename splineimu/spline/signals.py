@@ -1,6 +1,6 @@
 """The R3 signals the knot choice fits: the rotation as accumulated body-frame increments
-(white pose noise stays white in them, their time derivative is the body rate; at 666 Hz and
-faster their low band comes from block anchors, :func:`rotation_increments`), and the largest
+(white pose noise stays white in them, their time derivative is the body rate; from 100 Hz
+their low band comes from block anchors, :func:`rotation_increments`), and the largest
 rotation spacing the input's turning allows."""
 
 from __future__ import annotations
@@ -74,24 +74,75 @@ def rotation_increments(R, block=1):
     inc = lie.so3_log(np.matmul(np.swapaxes(R[:-1], 1, 2), R[1:]))
     if block <= 1 or R.shape[0] < 4 * block:
         return inc
-    from scipy.ndimage import uniform_filter1d
-
     d = accumulate(inc) - _anchored(R, block)
     for _ in range(2):  # triangular moving average over ~4 blocks
-        d = uniform_filter1d(d, 2 * block, axis=0, mode="nearest")
+        d = moving_mean(d, 2 * block)
     return inc - np.diff(d, axis=0)
 
 
+def moving_mean(x, size):
+    """Means of ``size`` consecutive rows of x (N, ...) about each row, the ends continued by
+    their edge rows (as scipy.ndimage's ``uniform_filter1d(x, size, axis=0, mode="nearest")``,
+    whose import would add 0.1-0.4 s to every fit)."""
+    left = size // 2
+    pad = np.concatenate([np.repeat(x[:1], left, axis=0), x, np.repeat(x[-1:], size - 1 - left, axis=0)])
+    c = np.concatenate([np.zeros((1,) + x.shape[1:]), np.cumsum(pad, axis=0)])
+    return (c[size:] - c[:-size]) / size
+
+
 #: Rotations sampled at spacings of half this or less (666 Hz and faster) are developed about
-#: block anchors for the knot choice (:func:`rotation_increments`); slower ones use the plain
-#: increments.
+#: block anchors of at least this length for the knot choice (:func:`rotation_increments`) ...
 ANCHOR_SPACING_S = 3e-3
+#: ... and those from 100 Hz to 666 Hz about anchors of this length (at least two poses) where
+#: their noise is large for their rate (:data:`WALKING_NOISE_RAD_S`). The walk's second-order
+#: part grows as (sigma / h)^2 against the white noise: at 200 Hz with 1 deg white pose noise
+#: (sigma / h = 3.5 rad/s) the sum's 1 s means spread 7.7-7.9x as far as the noise's (ellipse,
+#: circle, rate-table), which the choice read as the rotation's bias: the circle scene, whose turn
+#: a spline follows exactly, read 1.3-2e-3 rad/s at 2-4 s knots, predicted gyro 3.6x the measured
+#: on 2 of 5 seeds (1.8-2.2x at 100 Hz), and the rate-table got 1.22x the best fixed setting; with
+#: 20 ms anchors, predicted 0.77-1.19x the measured on the six scenes at 100 and 200 Hz (2.1x the
+#: noise's spread left, the part a turning body's noise has as well).
+LOW_RATE_ANCHOR_S = 0.02
+#: Anchors below 666 Hz from this ratio of the rotation noise (per axis, from the increments'
+#: differences) to the pose spacing [rad/s]: 0.29 deg at 100 Hz, 0.14 deg at 200 Hz, 0.06 deg at
+#: 500 Hz. Below it the walk is within the noise realization's scatter: with anchors at 1 mm /
+#: 0.1 deg the choices moved either way by chance (120 Hz: 3 of 36 scene cases 1.00-1.02 ->
+#: 1.12-1.14x the best fixed setting; 200 Hz: one 0.79 -> 0.51x); at 3x that noise (200 Hz,
+#: anchored) every case stayed within the bars.
+WALKING_NOISE_RAD_S = 0.5
 
 
-def anchor_block(t):
-    """Poses per anchor block of :func:`rotation_increments` for stamps t (1: no anchors)."""
+def anchor_block(t, R=None):
+    """Poses per anchor block of :func:`rotation_increments` for stamps t and rotations R (N, 3,
+    3) (1: no anchors; without R, none below 666 Hz)."""
     h = float(np.median(np.diff(t))) if t.size > 1 else 0.0
-    return max(1, int(ANCHOR_SPACING_S / h)) if h > 0 else 1
+    if not h > 0:
+        return 1
+    block = int(ANCHOR_SPACING_S / h)
+    if block >= 2:
+        return block
+    block = int(LOW_RATE_ANCHOR_S / h + 1e-6)
+    if block < 2 or R is None or rotation_noise(R) < WALKING_NOISE_RAD_S * h:
+        return 1
+    return block
+
+
+#: Poses (the middle ones) from which :func:`rotation_noise` is read.
+NOISE_POSES = 100_000
+
+
+def rotation_noise(R):
+    """Per-axis white noise of rotations R (N, 3, 3), robustly from the differences of their
+    body-frame increments (n_{m+1} - 2 n_m + n_{m-1}: 6 sigma^2; within 1% on the analytic
+    scenes at 100-200 Hz, 1.2-1.7x on the flips scene's fast turns at 100 Hz and 0.05-0.1 deg)."""
+    n = R.shape[0]
+    if n < 8:
+        return 0.0
+    lo = max((n - NOISE_POSES) // 2, 0)
+    R = R[lo: lo + NOISE_POSES]
+    d = np.diff(lie.so3_log(np.matmul(np.swapaxes(R[:-1], 1, 2), R[1:])), axis=0)
+    mad = np.median(np.abs(d - np.median(d, axis=0)), axis=0)
+    return float(1.4826 * mad.mean() / np.sqrt(6.0))
 
 
 def _anchored(R, block):
