@@ -1,7 +1,7 @@
 """The R3 signals the knot choice fits: the rotation as accumulated body-frame increments
-(white pose noise stays white in them, their time derivative is the body rate; from 100 Hz
-their low band comes from block anchors, :func:`rotation_increments`), and the largest
-rotation spacing the input's turning allows."""
+(white pose noise stays white in them, their time derivative is the body rate; at high rates
+or noise their low band comes from block anchors, :func:`rotation_increments`), and the
+largest rotation spacing the input's turning allows."""
 
 from __future__ import annotations
 
@@ -93,19 +93,22 @@ def moving_mean(x, size):
 #: Rotations sampled at spacings of half this or less (666 Hz and faster) are developed about
 #: block anchors of at least this length for the knot choice (:func:`rotation_increments`) ...
 ANCHOR_SPACING_S = 3e-3
-#: ... and those from 100 Hz to 666 Hz about anchors of this length (at least two poses) where
-#: their noise is large for their rate (:data:`WALKING_NOISE_RAD_S`). The walk's second-order
-#: part grows as (sigma / h)^2 against the white noise: at 200 Hz with 1 deg white pose noise
-#: (sigma / h = 3.5 rad/s) the sum's 1 s means spread 7.7-7.9x as far as the noise's (ellipse,
-#: circle, rate-table), which the choice read as the rotation's bias: the circle scene, whose turn
-#: a spline follows exactly, read 1.3-2e-3 rad/s at 2-4 s knots, predicted gyro 3.6x the measured
-#: on 2 of 5 seeds (1.8-2.2x at 100 Hz), and the rate-table got 1.22x the best fixed setting; with
-#: 20 ms anchors, predicted 0.77-1.19x the measured on the six scenes at 100 and 200 Hz (2.1x the
-#: noise's spread left, the part a turning body's noise has as well).
-LOW_RATE_ANCHOR_S = 0.02
-#: Anchors below 666 Hz from this ratio of the rotation noise (per axis, from the increments'
-#: differences) to the pose spacing [rad/s]: 0.29 deg at 100 Hz, 0.14 deg at 200 Hz, 0.06 deg at
-#: 500 Hz. Below it the walk is within the noise realization's scatter: with anchors at 1 mm /
+#: ... and those from 100 Hz up whose noise is large for their rate
+#: (:data:`WALKING_NOISE_RAD_S`) about anchors of this length (at least two poses). The walk's
+#: second-order part grows as (sigma / h)^2 against the white noise: at 200 Hz with 1 deg white
+#: pose noise (sigma / h = 3.5 rad/s) the sum's 1 s means spread 7.7-7.9x as far as the noise's
+#: (ellipse, circle, rate-table), which the choice read as the rotation's bias: the circle scene,
+#: whose turn a spline follows exactly, read 1.3-2e-3 rad/s at 2-4 s knots, predicted gyro 3.6x
+#: the measured on 2 of 5 seeds (1.8-2.2x at 100 Hz), and the rate-table got 1.22x the best fixed
+#: setting; with 20 ms anchors, predicted 0.77-1.19x the measured on the six scenes at 100 and
+#: 200 Hz (2.1x the noise's spread left, the part a turning body's noise has as well). At 1 kHz
+#: the 3 ms anchors (two poses) left the circle and screw scenes at 1.85x and 1.84x the best fixed
+#: setting with 1 deg of noise (30 s); with 20 ms 0.55x and 0.69x. At 10 kHz (30 poses) the
+#: choices are the same either way.
+NOISY_ANCHOR_S = 0.02
+#: Those anchors from this ratio of the rotation noise (per axis, from the increments'
+#: differences) to the pose spacing [rad/s]: 0.29 deg at 100 Hz, 0.14 deg at 200 Hz, 0.03 deg at
+#: 1 kHz. Below it the walk is within the noise realization's scatter: with anchors at 1 mm /
 #: 0.1 deg the choices moved either way by chance (120 Hz: 3 of 36 scene cases 1.00-1.02 ->
 #: 1.12-1.14x the best fixed setting; 200 Hz: one 0.79 -> 0.51x); at 3x that noise (200 Hz,
 #: anchored) every case stayed within the bars.
@@ -114,17 +117,16 @@ WALKING_NOISE_RAD_S = 0.5
 
 def anchor_block(t, R=None):
     """Poses per anchor block of :func:`rotation_increments` for stamps t and rotations R (N, 3,
-    3) (1: no anchors; without R, none below 666 Hz)."""
+    3) (1: no anchors; without R, the noise is not read: 3 ms blocks from 666 Hz, none below)."""
     h = float(np.median(np.diff(t))) if t.size > 1 else 0.0
     if not h > 0:
         return 1
     block = int(ANCHOR_SPACING_S / h)
-    if block >= 2:
+    block = block if block >= 2 else 1
+    noisy = int(NOISY_ANCHOR_S / h + 1e-6)
+    if noisy < 2 or R is None or rotation_noise(R) < WALKING_NOISE_RAD_S * h:
         return block
-    block = int(LOW_RATE_ANCHOR_S / h + 1e-6)
-    if block < 2 or R is None or rotation_noise(R) < WALKING_NOISE_RAD_S * h:
-        return 1
-    return block
+    return max(block, noisy)
 
 
 #: Poses (the middle ones) from which :func:`rotation_noise` is read.
