@@ -647,6 +647,19 @@ def test_rotation_signal_of_very_noisy_poses_at_200_hz_does_not_random_walk():
     assert 0.67 <= ratio <= 1.5, (rep.knot_spacing_s, ratio)
 
 
+@pytest.mark.parametrize("size", [2, 3, 8, 40, 400])
+def test_anchor_moving_mean_is_scipys_uniform_filter(size):
+    """The anchors' triangular smoothing (two moving means) is scipy.ndimage's uniform_filter1d
+    with the ends continued ("nearest"), to rounding, including windows longer than the data."""
+    from scipy.ndimage import uniform_filter1d
+
+    from splineimu.spline.signals import moving_mean
+
+    x = np.cumsum(np.random.default_rng(size).normal(size=(300, 3)), axis=0)
+    np.testing.assert_allclose(moving_mean(x, size), uniform_filter1d(x, size, axis=0, mode="nearest"),
+                               rtol=0, atol=1e-11)
+
+
 def test_very_noisy_rotation_at_1_khz_is_anchored_over_20_ms():
     """At 1 kHz the 3 ms anchors are two poses: with 1 deg of white noise the walk left was read
     as motion (screw scene, 30 s: order 5 at 1.58 s, gyro 1.84x the best fixed setting, k5 at 2.56
