@@ -58,7 +58,8 @@ def main(argv=None):
         return fit(t, P, Q, order=k, knot_spacing_s=dt, position_order=4, position_knot_spacing_s=10.0,
                    reject_outliers=False)
 
-    (proxy,) = _windows(t, rotation_increments(exact.world_R_body, anchor_block(t, R)), np.ones(t.size), True)
+    block = anchor_block(t, rotation_increments(R))  # (as the choice develops the noisy rotations)
+    (proxy,) = _windows(t, rotation_increments(exact.world_R_body, block), np.ones(t.size), True)
     spl, rep = fit(t, p, q, return_report=True)
     c = rep.knot_choice["rotation"]
     print(f"{args.scene} {args.kind}, {args.rate:g} Hz, seed {args.seed}, {args.scale:g} x 1 mm / 0.1 deg: auto "

@@ -602,8 +602,9 @@ def test_rotation_signal_of_high_rate_poses_does_not_random_walk():
     sc, t, p, R = scene_poses("screw", "white", 12.0, rate_hz=10_000.0, seed=1)
     exact = sc.kinematics(t).world_R_body
     noise = lie.so3_log(np.swapaxes(exact, 1, 2) @ R)
-    block = anchor_block(t, R)
-    assert anchor_block(t) == 30 and block == 200 and anchor_block(t[::50], R[::50]) == 1  # 0.1 deg at 200 Hz: none
+    block = anchor_block(t, rotation_increments(R))
+    assert anchor_block(t) == 30 and block == 200
+    assert anchor_block(t[::50], rotation_increments(R[::50])) == 1  # 0.1 deg at 200 Hz: none
 
     def wander(inc):  # per-axis spread of the 1 s means of the summed noise
         d = accumulate(inc) - accumulate(rotation_increments(exact, block)) - noise
@@ -631,9 +632,10 @@ def test_rotation_signal_of_very_noisy_poses_at_200_hz_does_not_random_walk():
     sc, t, p, R = scene_poses("circle", "white", 60.0, rate_hz=200.0, seed=2, angle_scale=10.0)  # 1 mm / 1 deg
     exact = sc.kinematics(t).world_R_body
     noise = lie.so3_log(np.swapaxes(exact, 1, 2) @ R)
-    assert rotation_noise(R) == pytest.approx(np.radians(1.0), rel=0.02)
-    block = anchor_block(t, R)
-    assert block == 4 and anchor_block(t) == 1 and anchor_block(t[::2], R[::2]) == 2  # 100 Hz: 0.5 deg and up
+    assert rotation_noise(rotation_increments(R)) == pytest.approx(np.radians(1.0), rel=0.02)
+    block = anchor_block(t, rotation_increments(R))
+    assert block == 4 and anchor_block(t) == 1
+    assert anchor_block(t[::2], rotation_increments(R[::2])) == 2  # 100 Hz: 0.5 deg and up
 
     def wander(inc):  # per-axis spread of the 1 s means of the summed noise
         d = accumulate(inc) - accumulate(rotation_increments(exact, block)) - noise
@@ -664,11 +666,11 @@ def test_very_noisy_rotation_at_1_khz_is_anchored_over_20_ms():
     """At 1 kHz the 3 ms anchors are two poses: with 1 deg of white noise the walk left was read
     as motion (screw scene, 30 s: order 5 at 1.58 s, gyro 1.84x the best fixed setting, k5 at 2.56
     s; predicted 1.79x the measured). Anchored over 20 ms: 3.33 s knots, 0.69x, predicted 1.01x."""
-    from splineimu.spline.signals import anchor_block
+    from splineimu.spline.signals import anchor_block, rotation_increments
 
     sc, t, p, R = scene_poses("screw", "white", 30.0, rate_hz=1000.0, seed=0, angle_scale=10.0)
     q = lie.matrix_to_quat_xyzw(R)
-    assert anchor_block(t) == 2 and anchor_block(t, R) == 20
+    assert anchor_block(t) == 2 and anchor_block(t, rotation_increments(R)) == 20
     gyro_err = gyro_error(sc, 30.0)
     spl, rep = fit(t, p, q, return_report=True)
     fixed = gyro_err(fit(t, p, q, order=5, knot_spacing_s=2.56, reject_outliers=False))

@@ -26,6 +26,7 @@ from ..errors import InputError, SplineImuError
 from .basis import MAX_ORDER, MIN_ORDER
 from .glitches import MAX_GLITCH_S, _running_median, _runs
 from .report import WARN_ACCEL_M_S2, WARN_GYRO_RAD_S, FitWarning
+from .signals import difference_noise
 from .surrogate import band_power, motion_limited, noise_at_spacing, residual_bursts
 
 #: Residual RMS above this many times the cross-validated pose noise (or, for a given spacing,
@@ -394,9 +395,7 @@ def noise_interpolated(t, P, theta):
 def _diff_noise(X):
     """Robust per-axis noise level from third differences (white noise: var = 20 sigma^2), as a
     vector norm."""
-    d = np.diff(X, 3, axis=0)
-    mad = np.median(np.abs(d - np.median(d, axis=0)), axis=0) / 0.6745
-    return float(np.linalg.norm(mad / np.sqrt(20.0)))
+    return float(np.linalg.norm(difference_noise(X, 3)))
 
 
 def _top_octave_fraction(h, X, r):

@@ -563,8 +563,9 @@ def choose_knot_spacing(t, P, R, w=None, rotation_order="auto", position_order="
     w = np.ones(t.size) if w is None else np.asarray(w, dtype=np.float64)
     ro = ORDERS if rotation_order == "auto" else (int(rotation_order),)
     po = ORDERS if position_order == "auto" else (int(position_order),)
-    block = anchor_block(t, R)
-    X, turn = rotation_increments(R, block), max_rotation_spacing(t, R, max_turn_rad)
+    inc = rotation_increments(R)
+    block = anchor_block(t, inc)
+    X, turn = rotation_increments(R, block, inc), max_rotation_spacing(t, R, max_turn_rad)
     rot = choose_signal(t, X, w, 1, ro, rotation_dt, turn, increments=True, as_motion=bool(estimated_rotation),
                         grid_phase=grid_phase)
     rot["estimated"] = bool(estimated_rotation)

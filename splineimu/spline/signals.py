@@ -5,6 +5,8 @@ largest rotation spacing the input's turning allows."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .. import lie
@@ -58,8 +60,9 @@ def max_rotation_spacing(t, R, limit=MAX_CONTROL_TURN_RAD):
     return lo_m * h
 
 
-def rotation_increments(R, block=1):
-    """Body-frame increments ``Log(R_{m-1}^T R_m)`` (N - 1, 3) of rotations R (N, 3, 3).
+def rotation_increments(R, block=1, inc=None):
+    """Body-frame increments ``Log(R_{m-1}^T R_m)`` (N - 1, 3) of rotations R (N, 3, 3) (``inc``:
+    the plain ones, where already at hand).
 
     Summed, the increments of noisy rotations random-walk: each step's second-order term
     (~sigma^2 / 2, a cross product of two poses' noise) does not telescope as the first-order
@@ -71,7 +74,8 @@ def rotation_increments(R, block=1):
     development about anchors, the mean rotations of consecutive blocks of that many poses,
     whose steps carry 1/block of the noise (walk down by block^1.5); above it the increments
     are kept (the anchors' blending would add kinks there)."""
-    inc = lie.so3_log(np.matmul(np.swapaxes(R[:-1], 1, 2), R[1:]))
+    if inc is None:
+        inc = lie.so3_log(np.matmul(np.swapaxes(R[:-1], 1, 2), R[1:]))
     if block <= 1 or R.shape[0] < 4 * block:
         return inc
     d = accumulate(inc) - _anchored(R, block)
@@ -115,16 +119,17 @@ NOISY_ANCHOR_S = 0.02
 WALKING_NOISE_RAD_S = 0.5
 
 
-def anchor_block(t, R=None):
-    """Poses per anchor block of :func:`rotation_increments` for stamps t and rotations R (N, 3,
-    3) (1: no anchors; without R, the noise is not read: 3 ms blocks from 666 Hz, none below)."""
+def anchor_block(t, inc=None):
+    """Poses per anchor block of :func:`rotation_increments` for stamps t and the plain rotation
+    increments ``inc`` (N - 1, 3) (1: no anchors; without them the noise is not read: 3 ms blocks
+    from 666 Hz, none below)."""
     h = float(np.median(np.diff(t))) if t.size > 1 else 0.0
     if not h > 0:
         return 1
     block = int(ANCHOR_SPACING_S / h)
     block = block if block >= 2 else 1
     noisy = int(NOISY_ANCHOR_S / h + 1e-6)
-    if noisy < 2 or R is None or rotation_noise(R) < WALKING_NOISE_RAD_S * h:
+    if noisy < 2 or inc is None or rotation_noise(inc) < WALKING_NOISE_RAD_S * h:
         return block
     return max(block, noisy)
 
@@ -133,18 +138,23 @@ def anchor_block(t, R=None):
 NOISE_POSES = 100_000
 
 
-def rotation_noise(R):
-    """Per-axis white noise of rotations R (N, 3, 3), robustly from the differences of their
-    body-frame increments (n_{m+1} - 2 n_m + n_{m-1}: 6 sigma^2; within 1% on the analytic
-    scenes at 100-200 Hz, 1.2-1.7x on the flips scene's fast turns at 100 Hz and 0.05-0.1 deg)."""
-    n = R.shape[0]
-    if n < 8:
+def rotation_noise(inc):
+    """White noise (per axis, the axes' mean) of rotations from their body-frame increments
+    ``inc`` (N - 1, 3): :func:`difference_noise` of their sum's second differences (within 1% on
+    the analytic scenes at 100-200 Hz, 1.2-1.7x on the flips scene's fast turns at 100 Hz and
+    0.05-0.1 deg)."""
+    if inc.shape[0] < 7:
         return 0.0
-    lo = max((n - NOISE_POSES) // 2, 0)
-    R = R[lo: lo + NOISE_POSES]
-    d = np.diff(lie.so3_log(np.matmul(np.swapaxes(R[:-1], 1, 2), R[1:])), axis=0)
-    mad = np.median(np.abs(d - np.median(d, axis=0)), axis=0)
-    return float(1.4826 * mad.mean() / np.sqrt(6.0))
+    lo = max((inc.shape[0] - NOISE_POSES) // 2, 0)
+    return float(difference_noise(accumulate(inc[lo: lo + NOISE_POSES]), 2).mean())
+
+
+def difference_noise(X, k):
+    """Per-axis white noise of X (N, ...), robustly from its k-th differences (the median absolute
+    deviation; white noise: var = C(2k, k) sigma^2)."""
+    d = np.diff(X, k, axis=0)
+    mad = np.median(np.abs(d - np.median(d, axis=0)), axis=0) / 0.6745
+    return mad / np.sqrt(math.comb(2 * k, k))
 
 
 def _anchored(R, block):
