@@ -116,8 +116,9 @@ def _initialize_nrt(cache, target_context):
         import llvmlite
         import llvmlite.binding as ll
 
+        # (DEBUG_NRT_STACK_LIMIT is newer than numba 0.61, the lowest allowed)
         key = (numba.__version__, llvmlite.__version__, codegen.magic_tuple(), config.MACHINE_BITS,
-               config.DEBUG_NRT, config.DEBUG_NRT_STACK_LIMIT)
+               config.DEBUG_NRT, getattr(config, "DEBUG_NRT_STACK_LIMIT", None))
         path = os.path.join(cache._cache_path, f"splineimu-nrt.{sys.implementation.cache_tag}.nbo")
         try:
             with open(path, "rb") as f:

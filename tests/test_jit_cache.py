@@ -154,3 +154,18 @@ def test_first_compile_is_announced_once_on_a_terminal_only(monkeypatch):
         _jit._announce_compiling()
         _jit._announce_compiling()
         assert stream.getvalue().count("compiling numerical kernels") == lines, stream.getvalue()
+
+
+def test_runtime_cache_key_without_newer_numba_settings(tmp_path):
+    """numba 0.61 (the lowest allowed) has no ``config.DEBUG_NRT_STACK_LIMIT``: the cached
+    runtime's key read it unconditionally, and every kernel's first call raised AttributeError
+    there (found by running the suite at the lowest versions)."""
+    (tmp_path / "lazykernel.py").write_text(KERNEL)
+    prelude = "import numba.core.config as c; c.__dict__.pop('DEBUG_NRT_STACK_LIMIT', None)\n"
+    e = {k: v for k, v in os.environ.items() if k != "SPLINEIMU_NUMBA_FULL_INIT"}
+    e.update(PYTHONPATH=os.pathsep.join([str(tmp_path), str(ROOT)]))
+    for _ in range(2):  # compiled, then loaded from the cache
+        out = subprocess.run([sys.executable, "-c", prelude + SCRIPT], env=e, capture_output=True, text=True,
+                             cwd=tmp_path)
+        assert out.returncode == 0, out.stderr
+        assert out.stdout.split()[0] == "20.0"
