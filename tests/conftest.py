@@ -90,17 +90,30 @@ OPTIONAL_PACKAGES = {"evo": "evo", "rdata": "rda"}
 
 
 @cache
-def _missing_extras(path: str) -> tuple[str, ...]:
+def _imports(path: str) -> tuple[set, list]:
+    """(top-level packages imported, paths of the modules imported relatively) of a module."""
     try:
         tree = ast.parse(Path(path).read_text(encoding="utf-8"))
     except (OSError, SyntaxError, UnicodeDecodeError):
-        return ()
-    names = set()
+        return set(), []
+    names, local = set(), []
     for node in ast.walk(tree):
         if isinstance(node, ast.Import):
             names.update(a.name.split(".")[0] for a in node.names)
         elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
             names.add(node.module.split(".")[0])
+        elif isinstance(node, ast.ImportFrom) and node.module:
+            base = Path(path).parents[node.level - 1].joinpath(*node.module.split("."))
+            local += [str(p) for p in (base.with_suffix(".py"), base / "__init__.py") if p.exists()]
+    return names, local
+
+
+@cache
+def _missing_extras(path: str) -> tuple[str, ...]:
+    # the module's own imports and those of the modules it imports relatively (api/compare.py
+    # runs evo through metrics.py)
+    names, local = _imports(path)
+    names = names.union(*(_imports(m)[0] for m in local))
     return tuple(sorted(OPTIONAL_PACKAGES[n] for n in names & set(OPTIONAL_PACKAGES)
                         if importlib.util.find_spec(n) is None))
 

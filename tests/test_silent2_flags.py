@@ -7,6 +7,7 @@ never typed. The synthesis commands already named their flags; these do now too.
 
 from __future__ import annotations
 
+import importlib.util
 import json
 
 import pytest
@@ -47,6 +48,8 @@ def test_library_names_become_flags(recording, tmp_path, capsys):
         (["preintegrate", str(recording), "--time-offset", "inf"],
          "splineimu preintegrate: error: `--time-offset` must be finite, got inf"),
     ]
+    if importlib.util.find_spec("evo") is None:  # (compare says evo is missing before it reads a flag)
+        cases = [c for c in cases if c[0][0] != "compare"]
     for argv, message in cases:
         assert _error(capsys, argv) == message
 
