@@ -83,9 +83,9 @@ def pytest_sessionfinish(session, exitstatus):
 
 
 # ---- doctests of features behind an optional extra --------------------------------------------
-# A module that imports an extra's package (at module level or lazily, as metrics.py imports evo)
-# has its doctests skipped when that package is absent, naming the extra; with the test extra
-# installed (as CI does) they all run.
+# A module that imports an extra's package (at module level or lazily, as metrics.py imports evo),
+# or imports relatively a module that does (api/compare.py), has its doctests skipped when that
+# package is absent, naming the extra; with the test extra installed (as CI does) they all run.
 OPTIONAL_PACKAGES = {"evo": "evo", "rdata": "rda"}
 
 
@@ -110,8 +110,6 @@ def _imports(path: str) -> tuple[set, list]:
 
 @cache
 def _missing_extras(path: str) -> tuple[str, ...]:
-    # the module's own imports and those of the modules it imports relatively (api/compare.py
-    # runs evo through metrics.py)
     names, local = _imports(path)
     names = names.union(*(_imports(m)[0] for m in local))
     return tuple(sorted(OPTIONAL_PACKAGES[n] for n in names & set(OPTIONAL_PACKAGES)
