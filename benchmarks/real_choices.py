@@ -53,7 +53,8 @@ def _inputs(extra):
     from benchmarks.real_pairs import load_broad
 
     folders = [DATA / "broad"] + [Path(d) for d in os.environ.get("BROAD_DATA", "").split(os.pathsep) if d]
-    trials = sorted({f.name[:2] for d in folders if d.is_dir() for f in d.glob("[0-9][0-9]_*.hdf5")})
+    trials = sorted({f.name[:2] for d in folders if d.is_dir() for ext in ("hdf5", "mat")
+                     for f in d.glob(f"[0-9][0-9]_*.{ext}")})
 
     def broad(n):
         def load():

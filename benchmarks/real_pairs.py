@@ -67,11 +67,17 @@ def load_broad(trial: str) -> Pair:
     import h5py
 
     folders = [DATA / "broad"] + [Path(d) for d in os.environ.get("BROAD_DATA", "").split(os.pathsep) if d]
-    path = next(p for d in folders for p in sorted(d.glob(f"{trial}_*.hdf5")))
-    with h5py.File(path, "r") as f:
-        rate = float(f.attrs["sampling_rate"])
-        gyr, acc = np.asarray(f["imu_gyr"]), np.asarray(f["imu_acc"])
-        q_wxyz, pos = np.asarray(f["opt_quat"]), np.asarray(f["opt_pos"])
+    path = next(p for d in folders for ext in ("hdf5", "mat") for p in sorted(d.glob(f"{trial}_*.{ext}")))
+    if path.suffix == ".mat":  # the repository's data_mat copy (MATLAB 5) of a trial: the same arrays
+        from scipy.io import loadmat
+
+        arrays = loadmat(path, squeeze_me=True)
+        rate = float(arrays["sampling_rate"])
+    else:
+        with h5py.File(path, "r") as f:
+            rate = float(f.attrs["sampling_rate"])
+            arrays = {k: np.asarray(f[k]) for k in ("imu_gyr", "imu_acc", "opt_quat", "opt_pos")}
+    gyr, acc, q_wxyz, pos = (np.asarray(arrays[k], dtype=float) for k in ("imu_gyr", "imu_acc", "opt_quat", "opt_pos"))
     t = np.arange(gyr.shape[0]) / rate
     ok = np.all(np.isfinite(q_wxyz), axis=1) & np.all(np.isfinite(pos), axis=1)
     q = q_wxyz[ok][:, [1, 2, 3, 0]]
@@ -155,7 +161,9 @@ PAIRS = {
     # from the folders in $BROAD_DATA (os.pathsep-separated) when not in ../shared/data/broad
     **{f"broad{n}": (lambda n=n: load_broad(n)) for n in
        ("02", "03", "05", "10", "11", "12", "14", "15", "18", "24", "25", "27", "30", "31", "32", "33", "34", "35",
-        "36")},
+        "36",
+        # their data_hdf5 blobs are absent from the repository snapshot; data_mat has them
+        "01", "04", "06", "08", "21", "26", "28", "29")},
     "euroc200": lambda: load_euroc("groundtruth.csv", "EuRoC V1_02 200 Hz"),
     "euroc20": lambda: load_euroc("groundtruth_vicon2gt_20hz.csv", "EuRoC V1_02 20 Hz vicon2gt"),
     # held out, not in ../shared/data: $EUROC_MH01 = "<MH_01_easy.txt>,<imu0 data.csv>"
