@@ -161,6 +161,21 @@ def test_broad_every_14th_pose_rotation_is_read_as_motion(name):
     assert told.knot_spacing_s > 0.04 and "read_as_noise" not in told.knot_choice["rotation"], told.summary()
 
 
+def test_precise_positions_make_a_rotation_motion_only_at_low_pose_rates(monkeypatch):
+    """The rule above holds up to knots.PRECISE_POSITION_MAX_RATE_HZ (100 Hz): at BROAD's full
+    286 Hz trial 04's positions were best fitted at 1.7 pose spacings and its rotation, mocap
+    noise, was read as motion (1.2 ms knots, full-band gyro 1.45x the best fixed setting and above
+    15 Hz 2x its real IMU's; now 28 ms, 0.97x; benchmarks/results/real_pairs.md). With the cap
+    below 20 Hz the same 20 Hz poses keep the noise reading."""
+    from splineimu.spline import knots
+
+    rp, pair = _pair("broad16")
+    low = rp.every(pair, "", 14, estimated="auto")
+    monkeypatch.setattr(knots, "PRECISE_POSITION_MAX_RATE_HZ", 15.0)
+    _, rep = fit(low.t_s, low.positions, low.quat_xyzw, return_report=True)
+    assert "read_as_noise" not in rep.knot_choice["rotation"] and rep.knot_spacing_s > 0.04, rep.summary()
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("name, gaps", [
     ("broad07", ()),

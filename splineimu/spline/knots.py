@@ -118,8 +118,8 @@ Method
    against the real IMU; now 18 ms, 0.99x. At 200 Hz: V1_02 10.6 -> 1.8 ms, full-band gyro
    1.075 -> 1.018x its best; MH_01 1.8 ms as before).
    Knots finer than the poses where the top of the band reads as noise (the held-out fits
-   interpolated noise correlated over neighbouring poses) are read the same way. So is a
-   rotation read as noisy beside precise positions (motion-limited, or best fitted at fewer than
+   interpolated noise correlated over neighbouring poses) are read the same way. So is (to 100
+   Hz) a rotation read as noisy beside precise positions (motion-limited, or best fitted under
    :data:`PRECISE_POSITION_CV_POSES` pose spacings) whose value is best fitted at fewer than
    :data:`PRECISE_CV_POSES` pose spacings: motion the poses sample too sparsely to predict, not
    noise (``read_as_noise`` keeps the first reading). BROAD's hand-held mocap every 14th pose
@@ -258,6 +258,9 @@ PRECISE_SLOPE = -2.0
 #: as noisy; sums of sines at 20 Hz with 0.2-1 mm white or AR(1) noise: 3.3-21 (upsampled noise
 #: 0.9, its rotation already misread either way).
 PRECISE_POSITION_CV_POSES = 2.0
+#: ... up to this pose rate (Hz): faster poses sample hand-held turns densely, and their rotation's
+#: residual is noise (BROAD 04, 286 Hz: read as motion, 1.2 ms knots, gyro above 15 Hz 2x its IMU's).
+PRECISE_POSITION_MAX_RATE_HZ = 100.0
 
 
 def _best(table, orders):
@@ -572,7 +575,7 @@ def choose_knot_spacing(t, P, R, w=None, rotation_order="auto", position_order="
     pos = choose_signal(t, np.ascontiguousarray(P), w, 2, po, position_dt)
     h = float(np.median(np.diff(t)))
     if (rotation_dt is None and estimated_rotation is None and not rot["motion_limited"]
-            and np.count_nonzero(w > 0) >= 64  # (as few as motion_limited reads)
+            and np.count_nonzero(w > 0) >= 64 and h >= 1.0 / PRECISE_POSITION_MAX_RATE_HZ
             and (pos["motion_limited"] or pos["cv_knot_spacing_s"] < PRECISE_POSITION_CV_POSES * h)
             and rot["cv_knot_spacing_s"] < PRECISE_CV_POSES * h
             and not all(rounding_only(wd.X) for wd in _windows(t, X, w, increments=True))):
