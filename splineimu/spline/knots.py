@@ -575,7 +575,7 @@ def choose_knot_spacing(t, P, R, w=None, rotation_order="auto", position_order="
     pos = choose_signal(t, np.ascontiguousarray(P), w, 2, po, position_dt)
     h = float(np.median(np.diff(t)))
     if (rotation_dt is None and estimated_rotation is None and not rot["motion_limited"]
-            and np.count_nonzero(w > 0) >= 64 and h >= 1.0 / PRECISE_POSITION_MAX_RATE_HZ
+            and np.count_nonzero(w > 0) >= 64 and h * PRECISE_POSITION_MAX_RATE_HZ > 1.0 - 1e-6
             and (pos["motion_limited"] or pos["cv_knot_spacing_s"] < PRECISE_POSITION_CV_POSES * h)
             and rot["cv_knot_spacing_s"] < PRECISE_CV_POSES * h
             and not all(rounding_only(wd.X) for wd in _windows(t, X, w, increments=True))):
