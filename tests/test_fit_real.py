@@ -162,7 +162,7 @@ def test_broad_every_14th_pose_rotation_is_read_as_motion(name):
 
 
 def test_precise_positions_make_a_rotation_motion_only_at_low_pose_rates(monkeypatch):
-    """The rule above holds up to knots.PRECISE_POSITION_MAX_RATE_HZ (100 Hz): at BROAD's full
+    """The rule above holds up to knots.PRECISE_POSITION_MAX_RATE_HZ (50 Hz): at BROAD's full
     286 Hz trial 04's positions were best fitted at 1.7 pose spacings and its rotation, mocap
     noise, was read as motion (1.2 ms knots, full-band gyro 1.45x the best fixed setting and above
     15 Hz 2x its real IMU's; now 28 ms, 0.97x; benchmarks/results/real_pairs.md). With the cap

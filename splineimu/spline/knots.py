@@ -118,7 +118,7 @@ Method
    against the real IMU; now 18 ms, 0.99x. At 200 Hz: V1_02 10.6 -> 1.8 ms, full-band gyro
    1.075 -> 1.018x its best; MH_01 1.8 ms as before).
    Knots finer than the poses where the top of the band reads as noise (the held-out fits
-   interpolated noise correlated over neighbouring poses) are read the same way. So is (to 100
+   interpolated noise correlated over neighbouring poses) are read the same way. So is (to 50
    Hz) a rotation read as noisy beside precise positions (motion-limited, or best fitted under
    :data:`PRECISE_POSITION_CV_POSES` pose spacings) whose value is best fitted at fewer than
    :data:`PRECISE_CV_POSES` pose spacings: motion the poses sample too sparsely to predict, not
@@ -258,9 +258,9 @@ PRECISE_SLOPE = -2.0
 #: as noisy; sums of sines at 20 Hz with 0.2-1 mm white or AR(1) noise: 3.3-21 (upsampled noise
 #: 0.9, its rotation already misread either way).
 PRECISE_POSITION_CV_POSES = 2.0
-#: ... up to this pose rate (Hz): faster poses sample hand-held turns densely, and their rotation's
-#: residual is noise (BROAD 04, 286 Hz: read as motion, 1.2 ms knots, gyro above 15 Hz 2x its IMU's).
-PRECISE_POSITION_MAX_RATE_HZ = 100.0
+#: ... up to this pose rate (Hz; its cases are 10-20 Hz): faster poses sample hand-held turns densely
+#: (BROAD 04 at 286 Hz, fast hand-held AR(1) at 100 Hz: read as motion, gyro 1.45x and 2.8x best).
+PRECISE_POSITION_MAX_RATE_HZ = 50.0
 
 
 def _best(table, orders):
