@@ -50,11 +50,9 @@ def _inputs(extra):
     out = [(p, tum(DATA / p)) for p in TUM if (DATA / p).exists()]
     out += [(p, euroc(DATA / p)) for p in EUROC if (DATA / p).exists()]
     sys.path.insert(0, str(HERE.parent))
-    from benchmarks.real_pairs import load_broad
+    from benchmarks.real_pairs import broad_files, load_broad
 
-    folders = [DATA / "broad"] + [Path(d) for d in os.environ.get("BROAD_DATA", "").split(os.pathsep) if d]
-    trials = sorted({f.name[:2] for d in folders if d.is_dir() for ext in ("hdf5", "mat")
-                     for f in d.glob(f"[0-9][0-9]_*.{ext}")})
+    trials = sorted({f.name[:2] for f in broad_files()})
 
     def broad(n):
         def load():

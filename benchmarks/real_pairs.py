@@ -63,11 +63,17 @@ class Pair:
     estimated: object = "auto"
 
 
+def broad_files():
+    """BROAD trial files (hdf5, or the repository's data_mat copies) in ../shared/data/broad and
+    the folders of $BROAD_DATA (os.pathsep-separated), hdf5 first."""
+    folders = [DATA / "broad"] + [Path(d) for d in os.environ.get("BROAD_DATA", "").split(os.pathsep) if d]
+    return [p for d in folders if d.is_dir() for ext in ("hdf5", "mat") for p in sorted(d.glob(f"[0-9][0-9]_*.{ext}"))]
+
+
 def load_broad(trial: str) -> Pair:
     import h5py
 
-    folders = [DATA / "broad"] + [Path(d) for d in os.environ.get("BROAD_DATA", "").split(os.pathsep) if d]
-    path = next(p for d in folders for ext in ("hdf5", "mat") for p in sorted(d.glob(f"{trial}_*.{ext}")))
+    path = next(p for p in broad_files() if p.name.startswith(f"{trial}_"))
     if path.suffix == ".mat":  # the repository's data_mat copy (MATLAB 5) of a trial: the same arrays
         from scipy.io import loadmat
 
