@@ -176,6 +176,27 @@ def test_precise_positions_make_a_rotation_motion_only_at_low_pose_rates(monkeyp
     assert "read_as_noise" not in rep.knot_choice["rotation"] and rep.knot_spacing_s > 0.04, rep.summary()
 
 
+def test_thinned_mocap_rotation_best_fitted_at_3_to_4_pose_spacings_is_motion(monkeypatch):
+    """BROAD 15's mocap every 10th pose (28.6 Hz), 30-70 s (tests/data, a slice): positions best
+    fitted at 0.9 pose spacings, the rotation's value at 3.2 (its residual, motion, correlated
+    over 2 poses: blocks of 6). Read as noise it got 190 ms knots (the whole trial: 176 ms, gyro
+    below 10 Hz 11x the best fixed setting against the real IMU); read as motion, 12.5 ms and
+    1.07x (benchmarks/results/real_pairs.md). Under the old bound of 3 pose spacings it is read as
+    noise again."""
+    from pathlib import Path
+
+    from splineimu.io.tum import read_tum
+
+    track = read_tum(Path(__file__).parent / "data" / "broad15_every10th_30-70s.tum")
+    _, rep = fit(track, return_report=True)
+    rot = rep.knot_choice["rotation"]
+    assert rot["motion_limited"] and rot["read_as_noise"]["knot_spacing_s"] > 0.1, rep.summary()
+    assert rep.knot_spacing_s < 0.02, rep.summary()
+    monkeypatch.setattr(knots, "PRECISE_POSITION_ROTATION_CV_POSES", 3.0)
+    _, old = fit(track, return_report=True)
+    assert "read_as_noise" not in old.knot_choice["rotation"] and old.knot_spacing_s > 0.1, old.summary()
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("name, gaps", [
     ("broad07", ()),

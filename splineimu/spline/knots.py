@@ -121,14 +121,12 @@ Method
    interpolated noise correlated over neighbouring poses) are read the same way. So is (to 50
    Hz) a rotation read as noisy beside precise positions (motion-limited, or best fitted under
    :data:`PRECISE_POSITION_CV_POSES` pose spacings) whose value is best fitted at fewer than
-   :data:`PRECISE_CV_POSES` pose spacings: motion the poses sample too sparsely to predict, not
-   noise (``read_as_noise`` keeps the first reading). BROAD's hand-held mocap every 14th pose
-   (20 Hz), 13 of 15 trials so read: 43-393 ms knots, gyro below 10 Hz 1.14-6.3x the best fixed
-   setting against the real IMU; now 17-20 ms, 1.00-1.08x. EuRoC MH_01's ground truth every 10th
-   pose as TUM text: 136 -> 18 ms, 2.27 -> 0.99x. OpenVINS' 20 Hz V1_01, udel_gore, udel_arl and
-   10 Hz udel_garage: 35-168 -> 18-35 ms. Slow rotation with 0.05-0.1 deg noise under fast
-   precise positions (sums of sines at 20 Hz) is best fitted at 7-16 pose spacings, and stays
-   read as noise (interpolated, 10-50x its best).
+   :data:`PRECISE_POSITION_ROTATION_CV_POSES` pose spacings: motion the poses sample too sparsely
+   to predict, not noise (``read_as_noise`` keeps the first reading). BROAD's hand-held mocap
+   every 14th pose (20 Hz), 14 of 15 trials: 43-412 -> 17-20 ms, gyro below 10 Hz 1.14-6.3x ->
+   1.00-1.08x the best fixed setting against the real IMU; EuRoC MH_01's ground truth every 10th
+   pose as TUM text: 136 -> 18 ms, 2.27 -> 0.99x; OpenVINS' 20 Hz V1_01, udel_gore, udel_arl and
+   10 Hz udel_garage: 35-168 -> 18-35 ms. Rotation noise under precise positions stays noise.
 5. The rotation spacing never exceeds the time in which the input turns by 135 degrees
    (:func:`max_rotation_spacing`): further apart, neighbouring control rotations near the
    opposite turn. Fast smooth rotation is best close to it (the flips scene, 17 rad/s, AR(1)
@@ -253,12 +251,14 @@ PRECISE_CV_POSES = 3.0
 PRECISE_SLOPE = -2.0
 #: Positions best fitted (value-optimal) at fewer than this many pose spacings, or motion-limited,
 #: are precise for the motion they hold: a rotation read as noisy beside them is read again as
-#: motion where its own value-optimal spacing is under PRECISE_CV_POSES (method, step 4). BROAD's
-#: mocap and EuRoC MH_01's ground truth at 20 Hz: 0.9-1.7 pose spacings where the positions read
-#: as noisy; sums of sines at 20 Hz with 0.2-1 mm white or AR(1) noise: 3.3-21 (upsampled noise
-#: 0.9, its rotation already misread either way).
+#: motion where its own value-optimal spacing is under PRECISE_POSITION_ROTATION_CV_POSES (step 4).
+#: BROAD's mocap and EuRoC MH_01's ground truth at 20 Hz: 0.9-1.7 pose spacings where the positions
+#: read as noisy; sums of sines at 20 Hz, 0.2-1 mm white or AR(1) noise: 3.3-21 (upsampled: 0.9).
 PRECISE_POSITION_CV_POSES = 2.0
-#: ... up to this pose rate (Hz; its cases are 10-20 Hz): faster poses sample hand-held turns densely
+#: BROAD's hand-held rotation at 20-41 Hz: 0.9-3.4 pose spacings (3 read 10 every 14th pose and 15 every
+#: 10th as noise: gyro 5.7x, 11x the best fixed setting; now 1.04x, 1.07x); noise under precise positions 7-16.
+PRECISE_POSITION_ROTATION_CV_POSES = 4.0
+#: ... up to this pose rate (Hz; its cases are 10-41 Hz): faster poses sample hand-held turns densely
 #: (BROAD 04 at 286 Hz, fast hand-held AR(1) at 100 Hz: read as motion, gyro 1.45x and 2.8x best).
 PRECISE_POSITION_MAX_RATE_HZ = 50.0
 
@@ -577,7 +577,7 @@ def choose_knot_spacing(t, P, R, w=None, rotation_order="auto", position_order="
     if (rotation_dt is None and estimated_rotation is None and not rot["motion_limited"]
             and np.count_nonzero(w > 0) >= 64 and h * PRECISE_POSITION_MAX_RATE_HZ > 1.0 - 1e-6
             and (pos["motion_limited"] or pos["cv_knot_spacing_s"] < PRECISE_POSITION_CV_POSES * h)
-            and rot["cv_knot_spacing_s"] < PRECISE_CV_POSES * h
+            and rot["cv_knot_spacing_s"] < PRECISE_POSITION_ROTATION_CV_POSES * h
             and not all(rounding_only(wd.X) for wd in _windows(t, X, w, increments=True))):
         # the positions are precise for their motion (motion-limited, or best fitted nearly
         # through the poses), and so is the rotation's value: its top octave is motion too,
