@@ -178,7 +178,7 @@ def test_precise_positions_make_a_rotation_motion_only_at_low_pose_rates(monkeyp
 
 def test_thinned_mocap_rotation_best_fitted_at_3_to_4_pose_spacings_is_motion(monkeypatch):
     """BROAD 15's mocap every 10th pose (28.6 Hz), 30-70 s (tests/data, a slice): positions best
-    fitted at 0.9 pose spacings, the rotation's value at 3.2 (its residual, motion, correlated
+    fitted at 0.7 pose spacings, the rotation's value at 3.2 (its residual, motion, correlated
     over 2 poses: blocks of 6). Read as noise it got 190 ms knots (the whole trial: 176 ms, gyro
     below 10 Hz 11x the best fixed setting against the real IMU); read as motion, 12.5 ms and
     1.07x (benchmarks/results/real_pairs.md). Under the old bound of 3 pose spacings it is read as

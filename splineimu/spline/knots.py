@@ -255,8 +255,8 @@ PRECISE_SLOPE = -2.0
 #: BROAD's mocap and EuRoC MH_01's ground truth at 20 Hz: 0.9-1.7 pose spacings where the positions
 #: read as noisy; sums of sines at 20 Hz, 0.2-1 mm white or AR(1) noise: 3.3-21 (upsampled: 0.9).
 PRECISE_POSITION_CV_POSES = 2.0
-#: BROAD's hand-held rotation at 20-41 Hz: 0.9-3.4 pose spacings (3 read 10 every 14th pose and 15 every
-#: 10th as noise: gyro 5.7x, 11x the best fixed setting; now 1.04x, 1.07x); noise under precise positions 7-16.
+#: BROAD's hand-held rotation at 20-41 Hz: 0.9-3.4 pose spacings (a bound of 3 left 10 every 14th pose and 15
+#: every 10th noise: gyro 5.7x, 11x the best fixed setting; now 1.04x, 1.07x); noise under precise positions 7-16.
 PRECISE_POSITION_ROTATION_CV_POSES = 4.0
 #: ... up to this pose rate (Hz; its cases are 10-41 Hz): faster poses sample hand-held turns densely
 #: (BROAD 04 at 286 Hz, fast hand-held AR(1) at 100 Hz: read as motion, gyro 1.45x and 2.8x best).
