@@ -3,10 +3,11 @@
 The Lie, spline and scene suites, the fit Jacobian checks and the doctests of the Lie and spline
 modules (collected by ``--doctest-modules`` in pyproject's addopts) run again in a subprocess with
 numba's jit disabled (a few seconds); the suites of the other kernels (cross-validation, Lie
-batch, integration, preintegration, running median, text formatting) that way are behind ``-m
-slow`` (1.8 min alone on the 2-core machine). The whole suite without jit takes hours there (the
-stamp-clock, noise and Allan tests run minute-long series through the kernels: one stamp test
-alone ran over 5 min), so it is not a test.
+batch, integration, preintegration, running median, text formatting, noise) and one test each
+of the Allan and stamp-clock kernels that way are behind ``-m slow`` (about 4 min alone on the
+2-core machine: the stamp test 2 min of it). The whole suite without jit takes hours there (the
+other stamp-clock and Allan tests run long series through the kernels: one stamp test alone ran
+over 5 min), so it is not a test.
 """
 
 from __future__ import annotations
@@ -39,4 +40,6 @@ def test_core_suites_without_jit():
 @pytest.mark.slow
 def test_kernel_suites_without_jit():
     _run(["-m", "not slow", "tests/test_knots_kernels.py", "tests/test_lie_kernels.py", "tests/test_integrate.py",
-          "tests/test_preintegration.py", "tests/test_running_median.py", "tests/test_io_writers.py"], timeout=1800)
+          "tests/test_preintegration.py", "tests/test_running_median.py", "tests/test_io_writers.py",
+          "tests/test_noise.py", "tests/test_allan.py::test_equals_allantools_oadev_freq",
+          "tests/test_stamps.py::test_receive_stamps_are_put_back_on_the_capture_clock[ellipse-0]"], timeout=1800)
