@@ -71,8 +71,6 @@ def broad_files():
 
 
 def load_broad(trial: str) -> Pair:
-    import h5py
-
     path = next(p for p in broad_files() if p.name.startswith(f"{trial}_"))
     if path.suffix == ".mat":  # the repository's data_mat copy (MATLAB 5) of a trial: the same arrays
         from scipy.io import loadmat
@@ -80,6 +78,8 @@ def load_broad(trial: str) -> Pair:
         arrays = loadmat(path, squeeze_me=True)
         rate = float(arrays["sampling_rate"])
     else:
+        import h5py
+
         with h5py.File(path, "r") as f:
             rate = float(f.attrs["sampling_rate"])
             arrays = {k: np.asarray(f[k]) for k in ("imu_gyr", "imu_acc", "opt_quat", "opt_pos")}

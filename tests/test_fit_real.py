@@ -167,8 +167,6 @@ def test_precise_positions_make_a_rotation_motion_only_at_low_pose_rates(monkeyp
     noise, was read as motion (1.2 ms knots, full-band gyro 1.45x the best fixed setting and above
     15 Hz 2x its real IMU's; now 28 ms, 0.97x; benchmarks/results/real_pairs.md). With the cap
     below 20 Hz the same 20 Hz poses keep the noise reading."""
-    from splineimu.spline import knots
-
     rp, pair = _pair("broad16")
     low = rp.every(pair, "", 14, estimated="auto")
     monkeypatch.setattr(knots, "PRECISE_POSITION_MAX_RATE_HZ", 15.0)
