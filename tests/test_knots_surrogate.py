@@ -1,6 +1,7 @@
 """The knot choice's noise surrogate against the noise it stands for: its power in the octave
 above the fit's cut-off (measured there) and in the octave below (continued from the level on
-the octave's trend with the octave's slope, bounded to [-2, 0])."""
+the octave's trend with the octave's slope, bounded to [-2, 0]); two octaves below where that
+slope is steeper than f^-2."""
 
 from __future__ import annotations
 
@@ -53,6 +54,40 @@ def test_surrogate_power_around_the_cut_off(kind, below, dt):
     # f^-4 roll-off is continued at f^-2 only (steeper noise drifts like motion)
     assert below[0] <= ratio <= below[1], ratio
 
+
+
+def _mocap_noise(n, rng, corner_hz):
+    """(n, 3) noise as mocap orientation has it: power f^-2 from 2 Hz to ``corner_hz``, f^-6
+    above (a filter's roll-off), flat below 2 Hz; 1e-3 RMS."""
+    f = np.fft.rfftfreq(n, 1.0 / RATE_HZ)
+    amp = 1.0 / np.maximum(f, 2.0) * np.minimum(1.0, corner_hz / np.maximum(f, 1e-9)) ** 2
+    x = np.fft.irfft(np.fft.rfft(rng.normal(size=(n, 3)), axis=0) * amp[:, None], n, axis=0)
+    return 1e-3 * x / x.std()
+
+
+# measured (seeds 3 and 4): the second octave below the cut-off 1.10-1.16 (mocap, corner 40 Hz,
+# read f^-5.7), 1.27 (corner 25 Hz, f^-5.8); 0.55-0.64 with one octave. AR(1), read f^-1.5 to
+# f^-1.7, keeps one octave: 0.46-0.55 (flat below it; two octaves read its flattening toward
+# 5 Hz as more noise)
+@pytest.mark.parametrize("kind, dt, want", [("mocap40", 0.012, (0.85, 1.4)), ("mocap25", 0.02, (0.9, 1.6)),
+                                            ("ar1", 0.02, (0.35, 0.7))])
+@pytest.mark.parametrize("seed", [3, 4])
+def test_surrogate_continues_noise_past_its_corner_two_octaves(kind, dt, want, seed):
+    """Noise falling faster than f^-2 above the cut-off is past its own corner and keeps rising
+    below it: continued at f^-2 for two octaves, not one (BROAD 29's rotation, read at a 50 Hz
+    cut-off, was drawn flat below 25 Hz and its 18-34 ms rungs' noise read as bias)."""
+    t = np.arange(0.0, 60.0, 1.0 / RATE_HZ)
+    motion = 0.5 * np.c_[np.sin(2 * np.pi * 0.3 * t), np.cos(2 * np.pi * 0.5 * t), np.sin(2 * np.pi * 0.2 * t + 1)]
+    rng = np.random.default_rng(seed)
+    noise = _mocap_noise(t.size, rng, float(kind[5:])) if kind.startswith("mocap") else _noise(kind, t.size, rng)
+    windows = crossval._windows(t, np.ascontiguousarray(motion + noise), np.ones(t.size))
+    first = sur.noise_spectrum(windows[0], 4, dt, np.random.default_rng(7))[1]
+    surrogate, _, read, _ = sur.noise_surrogates(windows, 4, dt)
+    assert (read < sur._MIN_NOISE_SLOPE) == kind.startswith("mocap"), read
+    f = np.fft.rfftfreq(t.size, 1.0 / RATE_HZ)
+    fc = first / (t[-1] - t[0])
+    ratio = _band_power(surrogate[0], f, fc / 4, fc / 2) / _band_power(noise, f, fc / 4, fc / 2)
+    assert want[0] <= ratio <= want[1], ratio
 
 def test_fast_len_is_the_least_5_smooth_length():
     """The spectra's FFT length: the least 2^a 3^b 5^c >= n (an hour at 200 Hz has 719998

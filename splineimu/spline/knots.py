@@ -26,8 +26,8 @@ Method
    spectrum is drawn. The spectrum is read from the coarser of the two cross-validated fits
    (0.1 s blocks see more of correlated noise) and continued below its cut-off from its level
    on the octave above's trend (the cut-off bin, where the measured transfer first reaches
-   0.2, reads up to 3.7x low), for one octave with that octave's log-log slope (median over
-   the windows, within [-2, 0]), flat beyond: the derivative's noise error is the spectrum
+   0.2, reads up to 3.7x low), for one octave (two where steeper than f^-2) with that octave's
+   log-log slope (median over the windows, within [-2, 0]), flat beyond: the noise error is the spectrum
    times f^2 (gyro) or f^4 (accel), so a spectrum rising toward low frequency puts it below the
    cut-off. BROAD orientation noise against the real gyro is f^-2 from 12 to 40 Hz, steeper
    above (07: f^-3.8 over 31-63 Hz); the surrogate matches it within 0.8-1.35x there in BROAD

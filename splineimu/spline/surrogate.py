@@ -13,6 +13,11 @@ import numpy as np
 
 #: Steepest slope of the noise spectrum's continuation below its cut-off (f^-2: white rate).
 _MIN_NOISE_SLOPE = -2.0
+#: Octaves below its cut-off over which the noise spectrum is continued with its slope (flat
+#: beyond), and where the octave above falls faster than _MIN_NOISE_SLOPE: noise past its own
+#: corner, which keeps rising below the cut-off (:func:`noise_surrogates`).
+_CONTINUE_OCTAVES = 1
+_STEEP_CONTINUE_OCTAVES = 2
 #: Share of the mean power of the tapered second differences below which their top octave is
 #: rounding, not noise (:func:`motion_limited`; exact input 1e-20-5e-13, 0.2 mm noise at 20 Hz
 #: on 0.3 m of hand-held motion 1e-4).
@@ -185,6 +190,14 @@ def noise_surrogates(windows, k, dt_cv, seed=7, follow=True, also_flat=False, wh
     AR(1) and upsampled noise are flat or nearly so above the cut-off and stay flat; noise
     rolling off above its own corner (mocap filters) keeps rising below it, but not faster than
     f^-2 (BROAD orientation against the real gyro: f^-2 from 12 to 40 Hz, f^-3.8 above 31 Hz).
+    Where the octave above falls faster than f^-2 (past such a corner) it is continued for two
+    octaves: the spectrum's fit can sit well above the spacings the ladder then weighs. BROAD 29's
+    rotation (286 Hz), its spectrum read from 8.8 ms knots (cut-off at 50 Hz; other trials'
+    15-22 ms, 21-32 Hz) and falling as f^-5.6 there, was drawn flat below 25 Hz: the rung-to-rung
+    changes of 18-34 ms knots held 1.7-2.5x the noise drawn (read off the changes that do not
+    correlate with the real gyro; 0.4-1.6x on 9 other trials, 06 1.5-3.7x), which was read as bias,
+    and the 27 ms knots chosen synthesized 1.05x the real IMU's gyro content above 15 Hz (34 ms
+    now: 0.94x, full band 1.020 -> 1.019x the best fixed setting).
     ``white`` (a test of the slope read): noise it passes whose spectrum is flat above twice the
     cut-off (:func:`_flat_above`) is white, drawn flat at the mean level of that band (the level
     at the cut-off holds motion the fit misses too), and its slope is returned as 0.
@@ -201,6 +214,8 @@ def noise_surrogates(windows, k, dt_cv, seed=7, follow=True, also_flat=False, wh
         read = 0.0
     slope = float(np.clip(read, _MIN_NOISE_SLOPE, 0.0)) if slopes and follow else 0.0
 
+    octaves = _STEEP_CONTINUE_OCTAVES if read < _MIN_NOISE_SLOPE else _CONTINUE_OCTAVES
+
     def draw(slope):
         out = []
         for (P, first, _, level), rng, wd in zip(spectra, rngs, windows):
@@ -208,7 +223,7 @@ def noise_surrogates(windows, k, dt_cv, seed=7, follow=True, also_flat=False, wh
             if flat_white and first is not None:
                 P[:] = P[2 * first: int(0.9 * P.shape[0])].mean(axis=0)
             elif first is not None:
-                f = np.maximum(np.arange(first), first / 2.0)
+                f = np.maximum(np.arange(first), first / 2.0**octaves)
                 P[:first] = level * (f / first)[:, None] ** slope
             rng = copy.deepcopy(rng)  # every draw: the same phases
             phase = np.exp(2j * np.pi * rng.random(P.shape))
