@@ -55,7 +55,6 @@ def test_surrogate_power_around_the_cut_off(kind, below, dt):
     assert below[0] <= ratio <= below[1], ratio
 
 
-
 def _mocap_noise(n, rng, corner_hz):
     """(n, 3) noise as mocap orientation has it: power f^-2 from 2 Hz to ``corner_hz``, f^-6
     above (a filter's roll-off), flat below 2 Hz; 1e-3 RMS."""
@@ -88,6 +87,7 @@ def test_surrogate_continues_noise_past_its_corner_two_octaves(kind, dt, want, s
     fc = first / (t[-1] - t[0])
     ratio = _band_power(surrogate[0], f, fc / 4, fc / 2) / _band_power(noise, f, fc / 4, fc / 2)
     assert want[0] <= ratio <= want[1], ratio
+
 
 def test_fast_len_is_the_least_5_smooth_length():
     """The spectra's FFT length: the least 2^a 3^b 5^c >= n (an hour at 200 Hz has 719998
