@@ -313,7 +313,8 @@ def fit(t_s, positions=None, quat_xyzw=None, kind="split", order="auto", knot_sp
                 add = max(new**2 - c["predicted_rms"] ** 2, 0.0)
                 c["end_predicted_rms"] = float(np.sqrt(c["end_predicted_rms"] ** 2 + add))
                 for gap in c["gaps"]:
-                    gap["predicted_rms"] = float(np.sqrt(gap["predicted_rms"] ** 2 + add))
+                    if gap["predicted_rms"] is not None:
+                        gap["predicted_rms"] = float(np.sqrt(gap["predicted_rms"] ** 2 + add))
                 c["predicted_rms"], c["end_zone_s"] = new, float(ro * lay_r[1])
             ch["predicted_gyro_rms_rad_s"] = ch["rotation"]["predicted_rms"]
             ch["predicted_accel_rms_m_s2"] = float(np.hypot(ch["position"]["predicted_rms"],

@@ -126,17 +126,21 @@ def prediction_warnings(choice, t):
             out.append(FitWarning("ends_less_accurate", f"the first and last {z:.3f} s are less accurate ({name} "
                                   f"~{c['end_predicted_rms']:.3g} {unit} against ~{c['predicted_rms']:.3g} inside): "
                                   f"trim {z:.3f} s from each end", float(t[0]), float(t[-1])))
-    # gaps: one warning per gap whose IMU error (either quantity) is far above the rest's
+    # gaps: one warning per gap whose IMU error (either quantity) is far above the rest's, or not measured
     told = {}
     for key, name, unit, lim in (("rotation", "gyro", "rad/s", WARN_GYRO_RAD_S),
                                  ("position", "accel", "m/s^2", WARN_ACCEL_M_S2)):
         c = choice[key]
         for gp in c.get("gaps", []):
-            if gp["predicted_rms"] > max(3.0 * c["predicted_rms"], lim):
-                told.setdefault((gp["t_start_s"], gp["t_end_s"]), []).append(
-                    f"{name} ~{gp['predicted_rms']:.3g} {unit} against ~{c['predicted_rms']:.3g} elsewhere")
+            e = gp["predicted_rms"]
+            if e is None or e > max(3.0 * c["predicted_rms"], lim):  # (None: longer than any gap it can open)
+                said = None if e is None else f"{name} ~{e:.3g} {unit} against ~{c['predicted_rms']:.3g} elsewhere"
+                told.setdefault((gp["t_start_s"], gp["t_end_s"]), []).append((name, said))
     for (a, b), what in sorted(told.items()):
+        known = [w for _, w in what if w is not None]
+        unknown = [n for n, w in what if w is None]
+        how = [", ".join(known) + ", measured by opening gaps that long where there are poses"] if known else []
+        how += [f"{' and '.join(unknown)} error not measured: no stretch of poses is that long"] if unknown else []
         out.append(FitWarning("gap_bridged", f"no poses from {a:.3f} s to {b:.3f} s ({b - a:.3f} s): the IMU there is "
-                              f"the fit's guess ({', '.join(what)}, measured by opening gaps that long where there "
-                              "are poses)", a, b))
+                              f"the fit's guess ({'; '.join(how)})", a, b))
     return out
