@@ -857,21 +857,22 @@ def test_gaps_are_told_with_their_error(scene_name, warned):
         assert 1 / 3 <= gap["predicted_rms"] / measured[key] <= (3 if warned else 4), (key, gap, measured)
 
 
-
 def test_a_gap_too_long_to_measure_is_told():
     """12 s without poses in 30 s: no stretch of poses is long enough to open such a gap and
     measure the error inside, and the gap was bridged without a gap_bridged warning (the
-    ellipse's gyro there is off by ~0.3 rad/s). Now told, its error marked as not measured."""
+    ellipse's gyro there is off by 0.62 rad/s, 0.0014 predicted elsewhere). Now told, its error
+    marked as not measured."""
     sc, t, p, R = scene_poses("ellipse", "white", 30.0, seed=1)
     keep = ~((t > 10.0) & (t < 22.0))
     spl, rep = fit(t[keep], p[keep], lie.matrix_to_quat_xyzw(R[keep]), return_report=True)
     te = np.arange(10.0, 22.0, 0.01)
-    assert np.sqrt(np.mean(np.sum((spl.imu(te)[0] - sc.imu(te)[0]) ** 2, axis=1))) > 0.1
+    assert np.sqrt(np.mean(np.sum((spl.imu(te)[0] - sc.imu(te)[0]) ** 2, axis=1))) > 0.3
     gaps = [w for w in rep.warnings if w.code == "gap_bridged"]
     assert len(gaps) == 1 and abs(gaps[0].t_start_s - 10.0) < 0.01 and abs(gaps[0].t_end_s - 22.0) < 0.01
     assert "not measured" in gaps[0].message, gaps[0].message
     (gap,) = rep.knot_choice["rotation"]["gaps"]
     assert gap["predicted_rms"] is None, gap
+
 
 def test_unclear_gyro_bias_estimates_take_the_power_law_of_a_clear_one():
     """Ellipse, white noise, 1 kHz: the order-6 rotation rungs at 794 and 992 ms read a bias of
