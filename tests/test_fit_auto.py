@@ -874,6 +874,20 @@ def test_a_gap_too_long_to_measure_is_told():
     assert gap["predicted_rms"] is None, gap
 
 
+
+def test_a_fit_unsettled_by_a_long_gap_says_so():
+    """16 s without poses under 68 ms rotation knots (flips): some 230 knot spacings whose
+    controls only the smoothness penalty holds, too weakly conditioned for Gauss-Newton to settle
+    (fit_not_converged). The warning names the gap and says to split the input there, not to
+    raise the iteration count (which does not help) or coarsen the knots."""
+    sc, t, p, R = scene_poses("flips", "white", 30.0, seed=1)
+    keep = ~((t > 8.0) & (t < 24.0))
+    _, rep = fit(t[keep], p[keep], lie.matrix_to_quat_xyzw(R[keep]), return_report=True)
+    (msg,) = [w.message for w in rep.warnings if w.code == "fit_not_converged"]
+    assert "without poses from 8.000 s to 24.000 s" in msg and "split the input there" in msg, msg
+    assert "more iterations" not in msg, msg
+    assert any(w.code == "gap_bridged" and abs(w.t_start_s - 8.0) < 0.01 for w in rep.warnings)
+
 def test_unclear_gyro_bias_estimates_take_the_power_law_of_a_clear_one():
     """Ellipse, white noise, 1 kHz: the order-6 rotation rungs at 794 and 992 ms read a bias of
     1.3e-4 and 1.6e-4 rad/s (below their noise part: within its scatter, and lagging a true 1e-4

@@ -56,6 +56,7 @@ from .problem import _Problem, bridge_note, bridge_weight
 from .report import FitReport, FitWarning, prediction_warnings
 from .signals import MAX_CONTROL_TURN_RAD, max_rotation_spacing, rotation_increments
 from .surrogate import LINE_GYRO_FLOOR, LINE_SHARE, prediction_at_spacing, residual_lines
+from .zones import find_gaps
 
 #: Poses (the middle ones) on which the rotation spline's bias is checked (:func:`_rotation_bias`).
 BIAS_CHECK_POSES = 2000
@@ -444,6 +445,14 @@ def fit(t_s, positions=None, quat_xyzw=None, kind="split", order="auto", knot_sp
         why = ("; no step lowered the cost any more, as when the knots are too coarse for the turns between them: try "
                "a finer knot spacing" if iters < max_iter else  # Levenberg-Marquardt gave up: more would not help
                " (more iterations: fit(max_iter=...); or a coarser knot spacing)")
+        # a gap spanning many knots leaves controls that only the smoothness penalty holds, too weakly
+        # conditioned to settle (BROAD 07 with 20 s left out, 28 ms knots: steps of radians there to the end)
+        long_gaps = [(a, b) for a, b in find_gaps(t, keep.astype(float)) if b - a > 4 * r_order * lay_r[1]]
+        if long_gaps:
+            a, b = max(long_gaps, key=lambda g: g[1] - g[0])
+            why = (f": the {b - a:.3g} s without poses from {a:.3f} s to {b:.3f} s spans {(b - a) / lay_r[1]:.0f} "
+                   "knot spacings, whose controls only the smoothness penalty holds; split the input there "
+                   "(--gaps split, PosesInput(gaps=\"split\"))")
         warnings.append(FitWarning("fit_not_converged", f"the rotation fit stopped after {iters} iterations without "
                                    f"converging: the spline may not be the least-squares one{why}"))
     report = FitReport(

@@ -140,7 +140,8 @@ def prediction_warnings(choice, t):
         known = [w for _, w in what if w is not None]
         unknown = [n for n, w in what if w is None]
         how = [", ".join(known) + ", measured by opening gaps that long where there are poses"] if known else []
-        how += [f"{' and '.join(unknown)} error not measured: no stretch of poses is that long"] if unknown else []
+        how += [f"{' and '.join(unknown)} error{'s' * (len(unknown) > 1)} not measured: no stretch of poses is that "
+                "long"] if unknown else []
         out.append(FitWarning("gap_bridged", f"no poses from {a:.3f} s to {b:.3f} s ({b - a:.3f} s): the IMU there is "
                               f"the fit's guess ({'; '.join(how)})", a, b))
     return out

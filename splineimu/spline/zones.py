@@ -62,7 +62,10 @@ def _gap_bias2(windows, noises, k, dt, r, zone, lengths):
             for c in np.linspace(t[0] + reach, t[-1] - reach, per + 2)[1:-1]:
                 sel = np.flatnonzero((t >= c - reach) & (t <= c + reach))
                 near = sel[np.abs(t[sel] - c) <= G / 2.0 + zone]
-                if np.any(w[near] <= 0) or np.any(np.diff(t[near]) > GAP_SPACINGS * h):
+                edge = G / 2.0 + zone - GAP_SPACINGS * h  # (poses up to both ends of the place: one
+                # beside a gap of the input's, which near's own spacing does not show, read a longer gap)
+                if (near.size < 2 or np.any(w[near] <= 0) or np.any(np.diff(t[near]) > GAP_SPACINGS * h)
+                        or t[near[0]] > c - edge or t[near[-1]] < c + edge):
                     continue  # a gap or left-out poses there already
                 ts = t[sel]
                 inside = (ts > c - G / 2.0) & (ts < c + G / 2.0)
