@@ -191,14 +191,14 @@ def noise_surrogates(windows, k, dt_cv, seed=7, follow=True, also_flat=False, wh
     rolling off above its own corner (mocap filters) keeps rising below it, but not faster than
     f^-2 (BROAD orientation against the real gyro: f^-2 from 12 to 40 Hz, f^-3.8 above 31 Hz).
     Where the octave above falls faster than f^-2 (past such a corner) it is continued for two
-    octaves: the spectrum's fit can sit well above the spacings the ladder then weighs. BROAD 29's
-    rotation (286 Hz), its spectrum read from 8.8 ms knots (cut-off at 50 Hz; 07, 16, 28: 15-22
-    ms, 21-32 Hz) and falling as f^-5.6 there, was drawn flat below 25 Hz: the rung-to-rung
-    changes of 18-34 ms knots held 1.7-2.5x the noise drawn (benchmarks/rung_split.py: the part of
-    the changes that does not correlate with the real gyro; 0.4-1.6x on 9 other trials, 06
-    1.5-3.7x, 15 1.1-2.4x), which was read as bias,
-    and the 27 ms knots chosen synthesized 1.05x the real IMU's gyro content above 15 Hz (34 ms
-    now: 0.94x, full band 1.020 -> 1.019x the best fixed setting).
+    octaves: the spectrum's fit can sit well above the spacings the ladder then weighs. BROAD
+    29's rotation (286 Hz), its spectrum read from 8.8 ms knots (cut-off at 50 Hz; 07, 16, 28:
+    15-22 ms, 21-32 Hz) and falling as f^-5.6 there, was drawn flat below 25 Hz: the
+    rung-to-rung changes of 18-34 ms knots held 1.7-2.5x the noise drawn
+    (benchmarks/rung_split.py: the part of the changes that does not correlate with the real
+    gyro; 0.4-1.6x on 9 other trials, 06 1.5-3.7x, 15 1.1-2.4x), which was read as bias, and the
+    27 ms knots chosen synthesized 1.05x the real IMU's gyro content above 15 Hz (34 ms now:
+    0.94x, full band 1.020 -> 1.019x the best fixed setting).
     ``white`` (a test of the slope read): noise it passes whose spectrum is flat above twice the
     cut-off (:func:`_flat_above`) is white, drawn flat at the mean level of that band (the level
     at the cut-off holds motion the fit misses too), and its slope is returned as 0.
